@@ -1,0 +1,102 @@
+//! Syntax diagnostics: what the parser and the value checks can say about
+//! one text. Each carries the span to point at; `code`, `label` and `help`
+//! give the rest of a rendered diagnostic.
+
+use crate::span::Span;
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SyntaxError {
+    /// The text does not fit the grammar at `span`.
+    #[error("expected {expected} {context}, found {found}")]
+    Unexpected {
+        span: Span,
+        /// Readable alternatives ("a length such as `50 mm`", "`->`").
+        expected: String,
+        found: String,
+        /// Where the parser was: "at the top level", "in a cell".
+        context: &'static str,
+        /// A keyword close to what was written.
+        suggestion: Option<String>,
+    },
+    #[error("unknown unit `{unit}`")]
+    UnknownUnit {
+        span: Span,
+        unit: String,
+        allowed: &'static str,
+    },
+    #[error("missing unit: `{number}` would mean {number} metres")]
+    MissingUnit { span: Span, number: String },
+    #[error("{what} takes a plain number, without a unit")]
+    UnexpectedUnit { span: Span, what: &'static str },
+    #[error("{what} must be a whole number, found `{found}`")]
+    NotWholeNumber {
+        span: Span,
+        what: &'static str,
+        found: String,
+    },
+    #[error("`{found}` is not a number")]
+    BadNumber { span: Span, found: String },
+}
+
+/// A bare length longer than this is taken for a forgotten unit.
+pub const MAX_BARE_METRES: f64 = 3.0;
+
+impl SyntaxError {
+    pub fn span(&self) -> Span {
+        match self {
+            SyntaxError::Unexpected { span, .. }
+            | SyntaxError::UnknownUnit { span, .. }
+            | SyntaxError::MissingUnit { span, .. }
+            | SyntaxError::UnexpectedUnit { span, .. }
+            | SyntaxError::NotWholeNumber { span, .. }
+            | SyntaxError::BadNumber { span, .. } => *span,
+        }
+    }
+
+    /// A stable code, documented in the README.
+    pub fn code(&self) -> &'static str {
+        match self {
+            SyntaxError::Unexpected { .. } => "E001",
+            SyntaxError::UnknownUnit { .. } => "E002",
+            SyntaxError::MissingUnit { .. } => "E003",
+            SyntaxError::UnexpectedUnit { .. } => "E004",
+            SyntaxError::NotWholeNumber { .. } => "E005",
+            SyntaxError::BadNumber { .. } => "E006",
+        }
+    }
+
+    /// The short text under the caret.
+    pub fn label(&self) -> String {
+        match self {
+            SyntaxError::Unexpected { expected, .. } => format!("expected {expected} here"),
+            SyntaxError::UnknownUnit { .. } => "not a unit".into(),
+            SyntaxError::MissingUnit { .. } => "no unit".into(),
+            SyntaxError::UnexpectedUnit { .. } => "unit not allowed here".into(),
+            SyntaxError::NotWholeNumber { .. } => "not a whole number".into(),
+            SyntaxError::BadNumber { .. } => "not a number".into(),
+        }
+    }
+
+    /// How to fix it.
+    pub fn help(&self) -> Option<String> {
+        match self {
+            SyntaxError::Unexpected {
+                suggestion: Some(s),
+                ..
+            } => Some(format!("did you mean `{s}`?")),
+            SyntaxError::Unexpected { found, .. } if found == "end of file" => Some(
+                "the file ends in the middle of a statement or block; close every `{` with `}`"
+                    .into(),
+            ),
+            SyntaxError::Unexpected { .. } => None,
+            SyntaxError::UnknownUnit { allowed, .. } => Some(format!("write one of {allowed}")),
+            SyntaxError::MissingUnit { number, .. } => Some(format!(
+                "a bare number is metres; write `{number} mm` or `{number} cm`, or `{number} m` if you really mean metres"
+            )),
+            SyntaxError::UnexpectedUnit { .. } => Some("remove the unit".into()),
+            SyntaxError::NotWholeNumber { .. } => Some("write a whole number such as `3`".into()),
+            SyntaxError::BadNumber { .. } => Some("write a number such as `0.25` or `-12`".into()),
+        }
+    }
+}

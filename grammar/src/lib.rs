@@ -1,0 +1,16 @@
+//! The `.pack` language: grammar, typed AST with byte spans, syntax
+//! diagnostics and the canonical formatter. This crate does no IO: it turns
+//! text into trees and trees back into text.
+
+pub mod ast;
+mod error;
+mod format;
+mod parser;
+mod span;
+mod suggest;
+
+pub use error::{MAX_BARE_METRES, SyntaxError};
+pub use format::{format, format_file};
+pub use parser::parse;
+pub use span::{LineIndex, Span};
+pub use suggest::{closest, edit_distance};

@@ -1,0 +1,802 @@
+//! From pest's parse tree to the typed AST, collecting every syntax error.
+
+use crate::ast::*;
+use crate::error::{MAX_BARE_METRES, SyntaxError};
+use crate::span::Span;
+use crate::suggest::closest;
+use pest::Parser;
+use pest::iterators::Pair;
+
+#[derive(pest_derive::Parser)]
+#[grammar = "pack.pest"]
+struct PackParser;
+
+/// Parses one `.pack` text. On failure returns every syntax error found,
+/// sorted by position.
+pub fn parse(src: &str) -> Result<File, Vec<SyntaxError>> {
+    let mut b = Builder { errors: Vec::new() };
+    let file = match PackParser::parse(Rule::file, src) {
+        Ok(mut pairs) => match pairs.next() {
+            Some(pair) => b.file(pair),
+            None => File { items: Vec::new() },
+        },
+        Err(e) => {
+            b.errors.push(from_pest(src, e, 0, "at the top level"));
+            File { items: Vec::new() }
+        }
+    };
+    if b.errors.is_empty() {
+        Ok(file)
+    } else {
+        b.errors.sort_by_key(|e| e.span());
+        Err(b.errors)
+    }
+}
+
+type P<'i> = Pair<'i, Rule>;
+
+fn span(p: &P) -> Span {
+    Span::new(p.as_span().start(), p.as_span().end())
+}
+
+fn is_punct(rule: Rule) -> bool {
+    matches!(
+        rule,
+        Rule::lparen
+            | Rule::rparen
+            | Rule::comma
+            | Rule::lbrace
+            | Rule::rbrace
+            | Rule::quote
+            | Rule::arrow
+    )
+}
+
+/// The children of a pair, without punctuation.
+fn kids<'i>(p: P<'i>) -> impl Iterator<Item = P<'i>> {
+    p.into_inner().filter(|k| !is_punct(k.as_rule()))
+}
+
+/// Readable name of what a rule matches, for "expected ..." messages.
+fn describe(rule: Rule) -> Option<&'static str> {
+    Some(match rule {
+        Rule::name | Rule::names => "a name",
+        Rule::number | Rule::quantity => "a number such as `50 mm`",
+        Rule::unit => "a unit",
+        Rule::point | Rule::lparen => "a point such as `(0.5, -0.2)`",
+        Rule::comma => "`,`",
+        Rule::rparen => "`)`",
+        Rule::lbrace => "`{`",
+        Rule::rbrace => "`}`",
+        Rule::quote | Rule::string => "a quoted string",
+        Rule::arrow => "`->`",
+        Rule::seq_mode => "`ascending`, `descending`, `listed` or `random`",
+        Rule::EOI => "the end of the line",
+        Rule::kw_use => "`use`",
+        Rule::kw_cell => "`cell`",
+        Rule::kw_product => "`product`",
+        Rule::kw_inventory => "`inventory`",
+        Rule::kw_order => "`order`",
+        Rule::kw_demo => "`demo`",
+        Rule::kw_demos => "`demos`",
+        Rule::kw_scenario => "`scenario`",
+        Rule::kw_scenarios => "`scenarios`",
+        Rule::kw_for => "`for`",
+        Rule::kw_robot => "`robot`",
+        Rule::kw_ur10 => "`ur10`",
+        Rule::kw_urdf => "`urdf`",
+        Rule::kw_base => "`base`",
+        Rule::kw_suction => "`suction`",
+        Rule::kw_pending => "`pending`",
+        Rule::kw_to => "`to`",
+        Rule::kw_box => "`box`",
+        Rule::kw_size => "`size`",
+        Rule::kw_slot => "`slot`",
+        Rule::kw_lift => "`lift`",
+        Rule::kw_cube => "`cube`",
+        Rule::kw_mass => "`mass`",
+        Rule::kw_customer => "`customer`",
+        Rule::kw_batch => "`batch`",
+        Rule::kw_sequence => "`sequence`",
+        Rule::kw_at => "`at`",
+        Rule::kw_choose => "`choose`",
+        Rule::kw_of => "`of`",
+        Rule::kw_into => "`into`",
+        Rule::kw_keep => "`keep`",
+        Rule::kw_jitter => "`jitter`",
+        Rule::kw_repeat => "`repeat`",
+        Rule::kw_seed => "`seed`",
+        Rule::kw_human => "`human`",
+        Rule::kw_packed => "`packed`",
+        Rule::kw_packs => "`packs`",
+        Rule::kw_missing => "`missing`",
+        Rule::kw_count => "`count`",
+        _ => return None,
+    })
+}
+
+/// Turns a pest error on `src[offset..]` into a syntax error located in `src`.
+fn from_pest(
+    src: &str,
+    e: pest::error::Error<Rule>,
+    offset: usize,
+    context: &'static str,
+) -> SyntaxError {
+    let pos = offset
+        + match e.location {
+            pest::error::InputLocation::Pos(p) => p,
+            pest::error::InputLocation::Span((s, _)) => s,
+        };
+    let positives = match e.variant {
+        pest::error::ErrorVariant::ParsingError { positives, .. } => positives,
+        pest::error::ErrorVariant::CustomError { .. } => Vec::new(),
+    };
+    let mut expected: Vec<&'static str> = Vec::new();
+    for d in positives.iter().filter_map(|r| describe(*r)) {
+        if !expected.contains(&d) {
+            expected.push(d);
+        }
+    }
+    if expected.len() > 1 {
+        expected.retain(|d| *d != "a unit");
+    }
+    let keywords: Vec<&str> = positives
+        .iter()
+        .filter_map(|r| describe(*r))
+        .filter(|d| d.starts_with('`') && d.ends_with('`') && !d.contains(' '))
+        .map(|d| d.trim_matches('`'))
+        .collect();
+    let (found, found_span) = token_at(src, pos);
+    if expected == ["a quoted string"] && found == "the end of the line" {
+        expected = vec!["a closing `\"` (strings end on the line they start)"];
+    }
+    let suggestion = if found.starts_with('`') {
+        closest(found.trim_matches('`'), keywords.iter().copied()).map(str::to_owned)
+    } else {
+        None
+    };
+    SyntaxError::Unexpected {
+        span: found_span,
+        expected: join_or(&expected),
+        found,
+        context,
+        suggestion,
+    }
+}
+
+fn join_or(items: &[&str]) -> String {
+    match items {
+        [] => "something else".into(),
+        [one] => (*one).into(),
+        [init @ .., last] => format!("{} or {last}", init.join(", ")),
+    }
+}
+
+/// What stands at `pos`: a word, one character, or the end of a line/file.
+fn token_at(src: &str, pos: usize) -> (String, Span) {
+    let rest = src.get(pos..).unwrap_or("");
+    let Some(c) = rest.chars().next() else {
+        return ("end of file".into(), Span::new(src.len(), src.len()));
+    };
+    if c == '\n' || c == '\r' {
+        return ("the end of the line".into(), Span::new(pos, pos));
+    }
+    let is_word = |c: char| c.is_alphanumeric() || c == '_' || c == '.' || c == '-';
+    if is_word(c) {
+        let len: usize = rest
+            .chars()
+            .take_while(|&c| is_word(c))
+            .map(char::len_utf8)
+            .sum();
+        return (format!("`{}`", &rest[..len]), Span::new(pos, pos + len));
+    }
+    (format!("`{c}`"), Span::new(pos, pos + c.len_utf8()))
+}
+
+struct Builder {
+    errors: Vec<SyntaxError>,
+}
+
+impl Builder {
+    fn file(&mut self, pair: P) -> File {
+        let src = pair.as_str();
+        let mut items = Vec::new();
+        for p in pair.into_inner() {
+            let item = match p.as_rule() {
+                Rule::use_item => self.use_item(p),
+                Rule::cell => self.cell(src, p),
+                Rule::product => self.product(p),
+                Rule::inventory => self.inventory(src, p),
+                Rule::order => self.order(src, p),
+                Rule::demo => self.demo(src, p),
+                Rule::demos => self.demos(src, p),
+                Rule::scenario => self.scenario(src, p),
+                Rule::scenarios => self.scenarios(src, p),
+                Rule::bad_item => {
+                    self.reparse(src, Rule::item_only, &p, "at the top level");
+                    continue;
+                }
+                _ => continue,
+            };
+            items.push(item);
+        }
+        File { items }
+    }
+
+    /// Re-parses a recovered fragment with the rule expected there, to say
+    /// precisely what is wrong with it.
+    fn reparse(&mut self, src: &str, rule: Rule, p: &P, context: &'static str) {
+        let start = p.as_span().start();
+        match PackParser::parse(rule, p.as_str()) {
+            Err(e) => self.errors.push(from_pest(src, e, start, context)),
+            Ok(_) => {
+                let end = p.as_span().end();
+                let (found, span) = token_at(src, end);
+                self.errors.push(SyntaxError::Unexpected {
+                    span,
+                    expected: "the end of the line".into(),
+                    found,
+                    context,
+                    suggestion: None,
+                });
+            }
+        }
+    }
+
+    /// Splits a block into its name, its `for` target (if any) and its
+    /// statement pairs; bad statements are reported and dropped.
+    fn block<'i>(
+        &mut self,
+        src: &str,
+        p: P<'i>,
+        only: Rule,
+        context: &'static str,
+    ) -> (Name, Option<Name>, Vec<P<'i>>) {
+        let mut names = Vec::new();
+        let mut stmts = Vec::new();
+        for k in kids(p) {
+            match k.as_rule() {
+                Rule::name => names.push(name(&k)),
+                Rule::bad_stmt => self.reparse(src, only, &k, context),
+                r if describe(r).is_some_and(|d| d.starts_with('`')) => {}
+                _ => stmts.push(k),
+            }
+        }
+        let mut names = names.into_iter();
+        let own = names.next().unwrap_or_else(|| Name {
+            text: String::new(),
+            span: Span::default(),
+        });
+        (own, names.next(), stmts)
+    }
+
+    fn use_item(&mut self, p: P) -> Item {
+        let s = span(&p);
+        let path = kids(p)
+            .find(|k| k.as_rule() == Rule::string)
+            .map(|k| string(&k));
+        Item::Use(Use {
+            path: path.unwrap_or(Str {
+                value: String::new(),
+                span: s,
+            }),
+            span: s,
+        })
+    }
+
+    fn cell(&mut self, src: &str, p: P) -> Item {
+        let s = span(&p);
+        let (name_, _, raw) = self.block(src, p, Rule::cell_stmt_only, "in a cell");
+        let mut stmts = Vec::new();
+        for st in raw {
+            let ss = span(&st);
+            let rule = st.as_rule();
+            let mut k: Vec<P> = kids(st).collect();
+            let kind = match rule {
+                Rule::robot_stmt => {
+                    let robot = match k.iter().find(|x| x.as_rule() == Rule::string) {
+                        Some(path) => Robot::Urdf(string(path)),
+                        None => Robot::Ur10,
+                    };
+                    CellStmt::Robot(robot)
+                }
+                Rule::base_stmt => CellStmt::Base(self.point(k.remove(1))),
+                Rule::suction_stmt => CellStmt::Suction(self.length(k.remove(1))),
+                Rule::lift_stmt => CellStmt::Lift(self.length(k.remove(1))),
+                Rule::pending_stmt => {
+                    let to = self.point(k.remove(3));
+                    let from = self.point(k.remove(1));
+                    CellStmt::Pending(from, to)
+                }
+                Rule::box_stmt => {
+                    let size = self.point(k.remove(4));
+                    let at = self.point(k.remove(2));
+                    CellStmt::Box {
+                        name: name(&k[1]),
+                        at,
+                        size,
+                    }
+                }
+                Rule::slot_stmt => {
+                    let at = self.point(k.remove(2));
+                    CellStmt::Slot {
+                        name: name(&k[1]),
+                        at,
+                    }
+                }
+                _ => continue,
+            };
+            stmts.push(Stmt { kind, span: ss });
+        }
+        Item::Cell(Cell {
+            name: name_,
+            stmts,
+            span: s,
+        })
+    }
+
+    fn product(&mut self, p: P) -> Item {
+        let s = span(&p);
+        let mut product_name = None;
+        let mut shape = None;
+        let mut mass = None;
+        for k in kids(p) {
+            match k.as_rule() {
+                Rule::name => product_name = Some(name(&k)),
+                Rule::cube_shape => {
+                    if let Some(q) = kids(k).nth(1) {
+                        shape = Some(Shape::Cube(self.length(q)));
+                    }
+                }
+                Rule::box_shape => {
+                    if let Some(q) = kids(k).nth(1) {
+                        shape = Some(Shape::Box(self.point(q)));
+                    }
+                }
+                Rule::mass_clause => {
+                    if let Some(q) = kids(k).nth(1) {
+                        mass = Some(self.mass(q));
+                    }
+                }
+                _ => {}
+            }
+        }
+        Item::Product(Product {
+            name: product_name.unwrap_or(Name {
+                text: String::new(),
+                span: s,
+            }),
+            shape: shape.unwrap_or(Shape::Cube(zero_length(s))),
+            mass,
+            span: s,
+        })
+    }
+
+    fn inventory(&mut self, src: &str, p: P) -> Item {
+        let s = span(&p);
+        let (name_, cell, raw) = self.block(src, p, Rule::inventory_stmt_only, "in an inventory");
+        let mut entries = Vec::new();
+        for st in raw {
+            let ss = span(&st);
+            let mut k: Vec<P> = kids(st).collect();
+            if k.len() < 2 {
+                continue;
+            }
+            let at = self.point(k.remove(1));
+            entries.push(Stmt {
+                kind: Entry {
+                    product: name(&k[0]),
+                    at,
+                },
+                span: ss,
+            });
+        }
+        Item::Inventory(Inventory {
+            name: name_,
+            cell: cell.unwrap_or_else(|| missing_name(s)),
+            entries,
+            span: s,
+        })
+    }
+
+    fn order(&mut self, src: &str, p: P) -> Item {
+        let s = span(&p);
+        let (name_, inv, raw) = self.block(src, p, Rule::order_stmt_only, "in an order");
+        let mut stmts = Vec::new();
+        for st in raw {
+            let ss = span(&st);
+            let rule = st.as_rule();
+            let mut k: Vec<P> = kids(st).collect();
+            let kind = match rule {
+                Rule::customer_stmt => OrderStmt::Customer(string(&k[1])),
+                Rule::batch_stmt => OrderStmt::Batch(self.count(k.remove(1), "`batch`")),
+                Rule::assign_stmt => OrderStmt::Assign {
+                    product: name(&k[0]),
+                    slot: name(&k[1]),
+                },
+                _ => continue,
+            };
+            stmts.push(Stmt { kind, span: ss });
+        }
+        Item::Order(Order {
+            name: name_,
+            inventory: inv.unwrap_or_else(|| missing_name(s)),
+            stmts,
+            span: s,
+        })
+    }
+
+    fn demo(&mut self, src: &str, p: P) -> Item {
+        let s = span(&p);
+        let (name_, order, raw) = self.block(src, p, Rule::demo_stmt_only, "in a demo");
+        let mut stmts = Vec::new();
+        for st in raw {
+            let ss = span(&st);
+            let rule = st.as_rule();
+            let kind = match rule {
+                Rule::sequence_list => DemoStmt::Sequence(names_of(st)),
+                Rule::at_stmt => {
+                    let (product, at) = self.at(st);
+                    DemoStmt::At { product, at }
+                }
+                _ => continue,
+            };
+            stmts.push(Stmt { kind, span: ss });
+        }
+        Item::Demo(Demo {
+            name: name_,
+            order: order.unwrap_or_else(|| missing_name(s)),
+            stmts,
+            span: s,
+        })
+    }
+
+    fn demos(&mut self, src: &str, p: P) -> Item {
+        let s = span(&p);
+        let (name_, inv, raw) = self.block(src, p, Rule::demos_stmt_only, "in a demos block");
+        let mut stmts = Vec::new();
+        for st in raw {
+            let ss = span(&st);
+            let rule = st.as_rule();
+            let kind = match rule {
+                Rule::choose_stmt => DemosStmt::Choose(self.choose(st)),
+                Rule::keep_stmt => DemosStmt::Keep(self.fraction(last(st), "`keep`")),
+                Rule::jitter_stmt => DemosStmt::Jitter(self.length(last(st))),
+                Rule::sequence_mode => DemosStmt::Sequence(seq_mode(&last(st))),
+                Rule::repeat_stmt => DemosStmt::Repeat(self.count(last(st), "`repeat`")),
+                Rule::seed_stmt => DemosStmt::Seed(self.count(last(st), "`seed`")),
+                Rule::human_packs_stmt => DemosStmt::HumanPacks(self.range(st)),
+                Rule::missing_range_stmt => DemosStmt::Missing(self.range(st)),
+                _ => continue,
+            };
+            stmts.push(Stmt { kind, span: ss });
+        }
+        Item::Demos(Demos {
+            name: name_,
+            inventory: inv.unwrap_or_else(|| missing_name(s)),
+            stmts,
+            span: s,
+        })
+    }
+
+    fn scenario(&mut self, src: &str, p: P) -> Item {
+        let s = span(&p);
+        let (name_, order, raw) = self.block(src, p, Rule::scenario_stmt_only, "in a scenario");
+        let mut stmts = Vec::new();
+        for st in raw {
+            let ss = span(&st);
+            let rule = st.as_rule();
+            let kind = match rule {
+                Rule::human_packed_stmt => ScenarioStmt::HumanPacked(names_of(st)),
+                Rule::missing_list_stmt => ScenarioStmt::Missing(names_of(st)),
+                Rule::jitter_stmt => ScenarioStmt::Jitter(self.length(last(st))),
+                Rule::seed_stmt => ScenarioStmt::Seed(self.count(last(st), "`seed`")),
+                Rule::at_stmt => {
+                    let (product, at) = self.at(st);
+                    ScenarioStmt::At { product, at }
+                }
+                _ => continue,
+            };
+            stmts.push(Stmt { kind, span: ss });
+        }
+        Item::Scenario(Scenario {
+            name: name_,
+            order: order.unwrap_or_else(|| missing_name(s)),
+            stmts,
+            span: s,
+        })
+    }
+
+    fn scenarios(&mut self, src: &str, p: P) -> Item {
+        let s = span(&p);
+        let (name_, inv, raw) =
+            self.block(src, p, Rule::scenarios_stmt_only, "in a scenarios block");
+        let mut stmts = Vec::new();
+        for st in raw {
+            let ss = span(&st);
+            let rule = st.as_rule();
+            let kind = match rule {
+                Rule::choose_stmt => ScenariosStmt::Choose(self.choose(st)),
+                Rule::human_packs_stmt => ScenariosStmt::HumanPacks(self.range(st)),
+                Rule::missing_range_stmt => ScenariosStmt::Missing(self.range(st)),
+                Rule::jitter_stmt => ScenariosStmt::Jitter(self.length(last(st))),
+                Rule::count_stmt => ScenariosStmt::Count(self.count(last(st), "`count`")),
+                Rule::seed_stmt => ScenariosStmt::Seed(self.count(last(st), "`seed`")),
+                _ => continue,
+            };
+            stmts.push(Stmt { kind, span: ss });
+        }
+        Item::Scenarios(Scenarios {
+            name: name_,
+            inventory: inv.unwrap_or_else(|| missing_name(s)),
+            stmts,
+            span: s,
+        })
+    }
+
+    // ---- pieces ---------------------------------------------------------
+
+    fn choose(&mut self, p: P) -> Choose {
+        let s = span(&p);
+        let mut n = None;
+        let mut lists = Vec::new();
+        for k in kids(p) {
+            match k.as_rule() {
+                Rule::quantity => n = Some(self.count(k, "`choose`")),
+                Rule::names => lists.push(names_of(k)),
+                _ => {}
+            }
+        }
+        let mut lists = lists.into_iter();
+        Choose {
+            n: n.unwrap_or(Count { value: 0, span: s }),
+            products: lists.next().unwrap_or_default(),
+            slots: lists.next().unwrap_or_default(),
+        }
+    }
+
+    fn range(&mut self, p: P) -> Range {
+        let s = span(&p);
+        let qs: Vec<P> = kids(p).filter(|k| k.as_rule() == Rule::quantity).collect();
+        let mut bounds = qs.into_iter().map(|q| self.count(q, "a range bound"));
+        let low = bounds.next().unwrap_or(Count { value: 0, span: s });
+        let high = bounds.next().unwrap_or(Count { value: 0, span: s });
+        Range { low, high, span: s }
+    }
+
+    fn at(&mut self, p: P) -> (Name, Point) {
+        let s = span(&p);
+        let mut product = missing_name(s);
+        let mut at = None;
+        for k in kids(p) {
+            match k.as_rule() {
+                Rule::name => product = name(&k),
+                Rule::point => at = Some(self.point(k)),
+                _ => {}
+            }
+        }
+        (product, at.unwrap_or_else(|| zero_point(s)))
+    }
+
+    fn point(&mut self, p: P) -> Point {
+        let s = span(&p);
+        let mut qs = kids(p)
+            .map(|q| self.length(q))
+            .collect::<Vec<_>>()
+            .into_iter();
+        let x = qs.next().unwrap_or_else(|| zero_length(s));
+        let y = qs.next().unwrap_or_else(|| zero_length(s));
+        Point {
+            x,
+            y,
+            z: qs.next(),
+            span: s,
+        }
+    }
+
+    /// Splits a `quantity` into its number (text, value) and optional unit.
+    fn quantity<'i>(&mut self, p: P<'i>) -> (String, f64, Option<(String, Span)>, Span) {
+        let s = span(&p);
+        let mut number = String::new();
+        let mut unit = None;
+        for k in p.into_inner() {
+            match k.as_rule() {
+                Rule::number => number = k.as_str().to_owned(),
+                Rule::unit => unit = Some((k.as_str().to_owned(), span(&k))),
+                _ => {}
+            }
+        }
+        let value = match number.parse::<f64>() {
+            Ok(v) if v.is_finite() => v,
+            _ => {
+                self.errors.push(SyntaxError::BadNumber {
+                    span: s,
+                    found: number.clone(),
+                });
+                0.0
+            }
+        };
+        (number, value, unit, s)
+    }
+
+    fn length(&mut self, p: P) -> Length {
+        let (number, value, unit, s) = self.quantity(p);
+        let unit = match unit {
+            None => {
+                if value.abs() > MAX_BARE_METRES {
+                    self.errors.push(SyntaxError::MissingUnit {
+                        span: s,
+                        number: number.clone(),
+                    });
+                }
+                None
+            }
+            Some((u, us)) => match u.as_str() {
+                "mm" => Some(LengthUnit::Mm),
+                "cm" => Some(LengthUnit::Cm),
+                "m" => Some(LengthUnit::M),
+                _ => {
+                    self.errors.push(SyntaxError::UnknownUnit {
+                        span: us,
+                        unit: u,
+                        allowed: "`mm`, `cm` or `m` (or no unit for metres)",
+                    });
+                    None
+                }
+            },
+        };
+        Length {
+            metres: value * unit.map_or(1.0, LengthUnit::metres),
+            number,
+            unit,
+            span: s,
+        }
+    }
+
+    fn mass(&mut self, p: P) -> Mass {
+        let (number, value, unit, s) = self.quantity(p);
+        let unit = match unit {
+            None => None,
+            Some((u, us)) => match u.as_str() {
+                "kg" => Some(MassUnit::Kg),
+                "g" => Some(MassUnit::G),
+                _ => {
+                    self.errors.push(SyntaxError::UnknownUnit {
+                        span: us,
+                        unit: u,
+                        allowed: "`kg` or `g` (or no unit for kilograms)",
+                    });
+                    None
+                }
+            },
+        };
+        let kg = if unit == Some(MassUnit::G) {
+            value / 1000.0
+        } else {
+            value
+        };
+        Mass {
+            kg,
+            number,
+            unit,
+            span: s,
+        }
+    }
+
+    fn count(&mut self, p: P, what: &'static str) -> Count {
+        let (number, _, unit, s) = self.quantity(p);
+        if let Some((_, us)) = unit {
+            self.errors
+                .push(SyntaxError::UnexpectedUnit { span: us, what });
+        }
+        match number.parse::<u64>() {
+            Ok(value) => Count { value, span: s },
+            Err(_) => {
+                self.errors.push(SyntaxError::NotWholeNumber {
+                    span: s,
+                    what,
+                    found: number,
+                });
+                Count { value: 0, span: s }
+            }
+        }
+    }
+
+    fn fraction(&mut self, p: P, what: &'static str) -> Fraction {
+        let (number, value, unit, s) = self.quantity(p);
+        if let Some((_, us)) = unit {
+            self.errors
+                .push(SyntaxError::UnexpectedUnit { span: us, what });
+        }
+        Fraction {
+            value,
+            number,
+            span: s,
+        }
+    }
+}
+
+fn name(p: &P) -> Name {
+    Name {
+        text: p.as_str().to_owned(),
+        span: span(p),
+    }
+}
+
+fn missing_name(s: Span) -> Name {
+    Name {
+        text: String::new(),
+        span: s,
+    }
+}
+
+fn zero_length(s: Span) -> Length {
+    Length {
+        metres: 0.0,
+        number: "0".into(),
+        unit: None,
+        span: s,
+    }
+}
+
+fn zero_point(s: Span) -> Point {
+    Point {
+        x: zero_length(s),
+        y: zero_length(s),
+        z: None,
+        span: s,
+    }
+}
+
+/// The last child of a statement (its value).
+fn last(p: P) -> P {
+    let s = p.clone();
+    kids(p).last().unwrap_or(s)
+}
+
+fn names_of(p: P) -> Vec<Name> {
+    let mut out = Vec::new();
+    for k in p.into_inner() {
+        match k.as_rule() {
+            Rule::name => out.push(name(&k)),
+            Rule::names => out.extend(names_of(k)),
+            _ => {}
+        }
+    }
+    out
+}
+
+fn seq_mode(p: &P) -> SequenceMode {
+    match p.as_str() {
+        "descending" => SequenceMode::Descending,
+        "listed" => SequenceMode::Listed,
+        "random" => SequenceMode::Random,
+        _ => SequenceMode::Ascending,
+    }
+}
+
+fn string(p: &P) -> Str {
+    let raw = p
+        .clone()
+        .into_inner()
+        .find(|k| k.as_rule() == Rule::string_inner)
+        .map_or("", |k| k.as_str());
+    let mut value = String::with_capacity(raw.len());
+    let mut chars = raw.chars();
+    while let Some(c) = chars.next() {
+        if c == '\\' {
+            match chars.next() {
+                Some('n') => value.push('\n'),
+                Some('t') => value.push('\t'),
+                Some(other) => value.push(other),
+                None => {}
+            }
+        } else {
+            value.push(c);
+        }
+    }
+    Str {
+        value,
+        span: span(p),
+    }
+}

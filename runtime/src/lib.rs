@@ -1,0 +1,1 @@
+//! The robot world (kinematics, collision, simulator, networks, smoothing, drivers): filled by the next issues.
