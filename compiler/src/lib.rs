@@ -1,1 +1,105 @@
+//! The packwright compiler: `.pack` files in, checked model and artifacts
+//! out. Pure: files are read through a [`Loader`], artifacts are returned
+//! as bytes; the caller does the IO.
+//!
+//! Phases: [`load`] (read + parse, following `use`) -> [`resolve`] (names,
+//! statements) -> [`validate`] (geometry) -> [`expand`] (generators) ->
+//! [`dataset`] (graph samples) -> [`emit`] (artifact bytes). Each phase
+//! reports every error it finds; a phase runs only if those before it were
+//! clean, so that one mistake is not reported again as its consequences.
 
+pub mod artifact;
+pub mod dataset;
+pub mod diagnostic;
+pub mod emit;
+mod error;
+pub mod expand;
+pub mod load;
+pub mod model;
+pub mod resolve;
+pub mod source;
+pub mod validate;
+
+pub use emit::Artifact;
+pub use error::Error;
+pub use source::{FileId, Loader, Loc, MemoryLoader, SourceMap};
+
+use std::path::PathBuf;
+
+/// A clean compilation.
+#[derive(Debug)]
+pub struct Compiled {
+    pub sources: SourceMap,
+    pub model: model::Model,
+    pub expanded: expand::Expanded,
+    pub graphs: dataset::Graphs,
+}
+
+/// A failed compilation: every error found, sorted by place.
+#[derive(Debug)]
+pub struct Failed {
+    pub sources: SourceMap,
+    pub errors: Vec<Error>,
+}
+
+impl Failed {
+    /// True when a file could not be read at all (not a diagnostic in it).
+    pub fn is_io(&self) -> bool {
+        self.errors.iter().any(|e| matches!(e, Error::Read { .. }))
+    }
+
+    pub fn render(&self) -> String {
+        self.errors
+            .iter()
+            .map(|e| diagnostic::render(&self.sources, e))
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+}
+
+fn fail(sources: SourceMap, mut errors: Vec<Error>) -> Failed {
+    errors.sort_by_key(|e| e.at());
+    errors.dedup();
+    Failed { sources, errors }
+}
+
+/// Checks the files and everything they use, and expands their generators.
+pub fn check(loader: &dyn Loader, roots: &[PathBuf]) -> Result<Compiled, Failed> {
+    let loaded = load::load(loader, roots);
+    if !loaded.errors.is_empty() {
+        return Err(fail(loaded.sources, loaded.errors));
+    }
+    let (model, mut errors) = resolve::resolve(loader, &loaded.sources, &loaded.files);
+    errors.extend(validate::validate(&model));
+    if !errors.is_empty() {
+        return Err(fail(loaded.sources, errors));
+    }
+    let expanded = match expand::expand(&model) {
+        Ok(x) => x,
+        Err(errors) => return Err(fail(loaded.sources, errors)),
+    };
+    let graphs = dataset::build(&model, &expanded);
+    Ok(Compiled {
+        sources: loaded.sources,
+        model,
+        expanded,
+        graphs,
+    })
+}
+
+/// Checks, then serialises the artifacts.
+pub fn compile(
+    loader: &dyn Loader,
+    roots: &[PathBuf],
+) -> Result<(Compiled, Vec<Artifact>), Failed> {
+    let compiled = check(loader, roots)?;
+    match emit::emit(
+        &compiled.sources,
+        &compiled.model,
+        &compiled.expanded,
+        &compiled.graphs,
+    ) {
+        Ok(artifacts) => Ok((compiled, artifacts)),
+        Err(e) => Err(fail(compiled.sources, vec![e])),
+    }
+}

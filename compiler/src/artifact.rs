@@ -1,0 +1,230 @@
+//! The JSON artifacts' schema (written by `emit`, read back by `show` and
+//! the runtime). Field names are part of the documented format.
+
+use serde::{Deserialize, Serialize};
+
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// `manifest.json`
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Manifest {
+    pub schema: String,
+    pub version: u32,
+    pub sources: Vec<SourceDigest>,
+    pub counts: Counts,
+    pub tensors: TensorShapes,
+    pub demo_blocks: Vec<DemoBlockRecord>,
+    pub demonstrations: Vec<DemonstrationRecord>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SourceDigest {
+    pub path: String,
+    pub sha256: String,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+pub struct Counts {
+    pub cells: usize,
+    pub products: usize,
+    pub inventories: usize,
+    pub orders: usize,
+    pub demo_blocks: usize,
+    pub demonstrations: usize,
+    pub samples: usize,
+    pub suites: usize,
+    pub scenarios: usize,
+}
+
+/// S, M and E of `graphs.safetensors`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+pub struct TensorShapes {
+    pub samples: usize,
+    pub nodes: usize,
+    pub edges: usize,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct DemoBlockRecord {
+    pub name: String,
+    /// `demo` or `demos`.
+    pub kind: String,
+    pub cell: String,
+    pub inventory: String,
+    pub order: Option<String>,
+    /// Goal configurations spanned before `keep`.
+    pub configurations: u64,
+    pub kept_combinations: Vec<Vec<String>>,
+    /// Combinations left out by `keep`: unseen goal configurations to test on.
+    pub held_out_combinations: Vec<Vec<String>>,
+    pub first_demonstration: usize,
+    pub demonstrations: usize,
+    pub samples: usize,
+}
+
+/// A product and where it is, `[x, y, z]` in metres (z = centre height).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct At {
+    pub product: String,
+    pub at: [f64; 3],
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Assignment {
+    pub product: String,
+    pub slot: String,
+    pub label: u32,
+    /// Slot goal: (slot x, slot y, product height / 2).
+    pub goal: [f64; 3],
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct DemonstrationRecord {
+    pub block: String,
+    pub cell: String,
+    pub inventory: String,
+    pub assignment: Vec<Assignment>,
+    pub sequence: Vec<String>,
+    pub human_packed: Vec<String>,
+    pub missing: Vec<String>,
+    /// Every present product at the start, in node order.
+    pub start: Vec<At>,
+    pub first_sample: usize,
+    pub samples: usize,
+}
+
+/// `labels.json`
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct LabelsFile {
+    pub schema: String,
+    pub version: u32,
+    pub cells: Vec<CellLabels>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct CellLabels {
+    pub cell: String,
+    pub labels: Vec<Label>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Label {
+    pub label: u32,
+    /// `pick` or the slot's name.
+    pub name: String,
+    #[serde(rename = "box")]
+    pub box_name: Option<String>,
+    /// The slot's (x, y) on the box floor (z = 0); `null` for `pick`.
+    pub position: Option<[f64; 2]>,
+}
+
+/// `orders.json`: the compiled world.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct WorldFile {
+    pub schema: String,
+    pub version: u32,
+    pub cells: Vec<CellRecord>,
+    pub products: Vec<ProductRecord>,
+    pub inventories: Vec<InventoryRecord>,
+    pub orders: Vec<OrderRecord>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(rename_all = "lowercase")]
+pub enum RobotRecord {
+    Ur10,
+    /// Path to a URDF file.
+    Urdf(String),
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct CellRecord {
+    pub name: String,
+    pub robot: RobotRecord,
+    pub base: [f64; 3],
+    pub suction: f64,
+    pub lift: f64,
+    pub pending: RectRecord,
+    pub boxes: Vec<BoxRecord>,
+    pub slots: Vec<SlotRecord>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct RectRecord {
+    pub min: [f64; 2],
+    pub max: [f64; 2],
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct BoxRecord {
+    pub name: String,
+    pub centre: [f64; 2],
+    pub size: [f64; 3],
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SlotRecord {
+    pub name: String,
+    pub label: u32,
+    #[serde(rename = "box")]
+    pub box_name: String,
+    pub position: [f64; 2],
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct ProductRecord {
+    pub name: String,
+    /// Width (x), depth (y), height (z).
+    pub size: [f64; 3],
+    pub mass: Option<f64>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct InventoryRecord {
+    pub name: String,
+    pub cell: String,
+    /// In the listed order (node order).
+    pub products: Vec<At>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct OrderRecord {
+    pub name: String,
+    pub inventory: String,
+    pub cell: String,
+    pub customer: Option<String>,
+    pub batch: Option<u64>,
+    pub assignment: Vec<Assignment>,
+}
+
+/// `scenarios.json`
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct ScenariosFile {
+    pub schema: String,
+    pub version: u32,
+    pub suites: Vec<SuiteRecord>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SuiteRecord {
+    pub name: String,
+    /// `scenario` or `scenarios`.
+    pub kind: String,
+    pub cell: String,
+    pub inventory: String,
+    pub order: Option<String>,
+    pub seed: u64,
+    pub cases: Vec<CaseRecord>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct CaseRecord {
+    pub name: String,
+    pub assignment: Vec<Assignment>,
+    /// Already in their slots when the robot starts.
+    pub human_packed: Vec<String>,
+    /// Absent from the cell: the robot reports them as waiting.
+    pub missing: Vec<String>,
+    /// Every present product at the start, in node order.
+    pub start: Vec<At>,
+}

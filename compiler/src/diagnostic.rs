@@ -1,0 +1,102 @@
+//! Rendering errors for people (file:line:col, the source line, a caret, a
+//! fix) and for machines (one JSON object per error).
+
+use crate::error::Error;
+use crate::source::{Loc, SourceMap};
+use serde::Serialize;
+use std::fmt::Write;
+
+/// Renders one error as text, in the style of rustc:
+///
+/// ```text
+/// error[E021]: unknown product `F`
+///   --> orders/acme.pack:12:3
+///    |
+/// 12 |   F -> g1
+///    |   ^ not found in inventory `stock5`
+///    |
+///    = help: did you mean `E`?
+/// ```
+pub fn render(sources: &SourceMap, error: &Error) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "error[{}]: {error}", error.code());
+    match error.at() {
+        Some(at) => snippet(&mut out, sources, at, &error.label()),
+        None => {
+            if let Error::Read { path, .. } = error {
+                let _ = writeln!(out, "  --> {}", path.display());
+            }
+        }
+    }
+    for (loc, note) in error.notes() {
+        let _ = writeln!(out, "note: {note}");
+        snippet(&mut out, sources, loc, "");
+    }
+    if let Some(help) = error.help() {
+        let _ = writeln!(out, "   = help: {help}");
+    }
+    out
+}
+
+fn snippet(out: &mut String, sources: &SourceMap, at: Loc, label: &str) {
+    let Some(file) = sources.get(at.file) else {
+        return;
+    };
+    let (line, col) = file.lines.line_col(&file.text, at.span.start as usize);
+    let text = file.lines.line_text(&file.text, line);
+    let number = line.to_string();
+    let pad = " ".repeat(number.len());
+    let _ = writeln!(out, "{pad}--> {}:{line}:{col}", file.path.display());
+    let _ = writeln!(out, "{pad} |");
+    let _ = writeln!(out, "{number} | {text}");
+    // Carets under the span's part on this line (at least one).
+    let start_char = col - 1;
+    let span_text = file.text.get(at.span.range()).unwrap_or("");
+    let on_line = span_text.split('\n').next().unwrap_or("");
+    let width = on_line.chars().count().max(1);
+    let lead: String = text
+        .chars()
+        .take(start_char)
+        .map(|c| if c == '\t' { '\t' } else { ' ' })
+        .collect();
+    let carets = "^".repeat(width);
+    if label.is_empty() {
+        let _ = writeln!(out, "{pad} | {lead}{carets}");
+    } else {
+        let _ = writeln!(out, "{pad} | {lead}{carets} {label}");
+    }
+}
+
+/// The machine-readable form of an error (`--json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct JsonDiagnostic {
+    pub code: &'static str,
+    pub message: String,
+    pub file: Option<String>,
+    pub line: Option<usize>,
+    pub column: Option<usize>,
+    pub label: String,
+    pub help: Option<String>,
+}
+
+pub fn to_json(sources: &SourceMap, error: &Error) -> JsonDiagnostic {
+    let (file, line, column) = match error.at() {
+        Some(at) => {
+            let (f, l, c) = sources.position(at);
+            (Some(f), Some(l), Some(c))
+        }
+        None => match error {
+            Error::Read { path, .. } => (Some(path.display().to_string()), None, None),
+            _ => (None, None, None),
+        },
+    };
+    JsonDiagnostic {
+        code: error.code(),
+        message: error.to_string(),
+        file,
+        line,
+        column,
+        label: error.label(),
+        help: error.help(),
+    }
+}

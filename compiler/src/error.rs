@@ -1,0 +1,397 @@
+//! Everything the compiler can report. Each variant is one check, carries
+//! the places it speaks of, and knows its stable code, its caret label and
+//! its fix (`help`). Rendering lives in `diagnostic`.
+
+use crate::source::Loc;
+use packwright_grammar::SyntaxError;
+use std::path::PathBuf;
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum Error {
+    #[error("cannot read `{}`: {reason}", path.display())]
+    Read { path: PathBuf, reason: String },
+    #[error("{error}")]
+    Syntax { at: Loc, error: SyntaxError },
+    #[error("cannot read `{path}`: {reason}")]
+    UseMissing {
+        at: Loc,
+        path: String,
+        reason: String,
+    },
+    #[error("`use` cycle: {chain}")]
+    UseCycle { at: Loc, chain: String },
+    #[error("robot description `{path}` cannot be read: {reason}")]
+    RobotFileMissing {
+        at: Loc,
+        path: String,
+        reason: String,
+    },
+    #[error("duplicate {kind} `{name}`")]
+    Duplicate {
+        at: Loc,
+        first: Loc,
+        kind: &'static str,
+        name: String,
+    },
+    #[error("unknown {kind} `{name}`")]
+    Unknown {
+        at: Loc,
+        kind: &'static str,
+        name: String,
+        /// Where the name was looked for: "inventory `stock5`".
+        scope: String,
+        suggestion: Option<String>,
+        known: Vec<String>,
+    },
+    #[error("{item} has no `{statement}` statement")]
+    MissingStatement {
+        at: Loc,
+        item: String,
+        statement: &'static str,
+        example: &'static str,
+    },
+    #[error("`{statement}` is given twice")]
+    StatementTwice {
+        at: Loc,
+        first: Loc,
+        statement: &'static str,
+    },
+    #[error("slot `{slot}` comes before any box")]
+    SlotBeforeBox { at: Loc, slot: String },
+    #[error("{what}")]
+    BadGeometry { at: Loc, what: String, fix: String },
+    #[error("slot `{slot}` is outside box `{box_name}`")]
+    SlotOutsideBox {
+        at: Loc,
+        slot: String,
+        box_name: String,
+        by_mm: f64,
+    },
+    #[error("slots `{a}` and `{b}` overlap ({distance_mm:.0} mm apart)")]
+    SlotsOverlap {
+        at: Loc,
+        first: Loc,
+        a: String,
+        b: String,
+        distance_mm: f64,
+    },
+    #[error("two products in slot `{slot}`: `{product}` and `{other}`")]
+    SlotTaken {
+        at: Loc,
+        first: Loc,
+        slot: String,
+        product: String,
+        other: String,
+    },
+    #[error("{what} `{name}` is listed twice")]
+    ListedTwice {
+        at: Loc,
+        first: Loc,
+        what: &'static str,
+        name: String,
+    },
+    #[error("product `{product}` is outside the pending area of cell `{cell}`")]
+    OutsidePending {
+        at: Loc,
+        product: String,
+        cell: String,
+        by_mm: f64,
+    },
+    #[error("products `{a}` and `{b}` overlap")]
+    ProductsOverlap {
+        at: Loc,
+        other: Loc,
+        a: String,
+        b: String,
+    },
+    #[error("{what} is out of the robot's reach ({distance:.3} m from the base axis)")]
+    OutOfReach {
+        at: Loc,
+        what: String,
+        distance: f64,
+        min: f64,
+        max: f64,
+    },
+    #[error(
+        "product `{product}` does not fit in slot `{slot}`: it sticks out of box `{box_name}` by {by_mm:.0} mm"
+    )]
+    DoesNotFit {
+        at: Loc,
+        product: String,
+        slot: String,
+        box_name: String,
+        by_mm: f64,
+    },
+    #[error("`{a}` in slot `{slot_a}` and `{b}` in slot `{slot_b}` would overlap")]
+    PlacedOverlap {
+        at: Loc,
+        a: String,
+        slot_a: String,
+        b: String,
+        slot_b: String,
+    },
+    #[error("`choose {n}` needs {n} {what}, but {available} are listed")]
+    ChooseTooMany {
+        at: Loc,
+        n: u64,
+        what: &'static str,
+        available: usize,
+    },
+    #[error("`{statement}` must be at least 1")]
+    Zero { at: Loc, statement: &'static str },
+    #[error("`keep {value}` is outside (0, 1]")]
+    FractionOutOfRange { at: Loc, value: f64 },
+    #[error("`{statement} {low} to {high}` is not a range within 0 to {n} selected products")]
+    RangeTooLarge {
+        at: Loc,
+        statement: &'static str,
+        low: u64,
+        high: u64,
+        n: u64,
+    },
+    #[error(
+        "a worker may pack {human} and {missing} may be missing, more than the {n} selected products"
+    )]
+    RangesTooLarge {
+        at: Loc,
+        human: u64,
+        missing: u64,
+        n: u64,
+    },
+    #[error(
+        "jitter cannot place product `{product}`: {tries} draws all left the pending area or overlapped another product"
+    )]
+    JitterImpossible {
+        at: Loc,
+        product: String,
+        tries: u32,
+    },
+    #[error("`keep {fraction}` keeps no combination of the {combinations}")]
+    KeepsNothing {
+        at: Loc,
+        fraction: f64,
+        combinations: u64,
+    },
+    #[error("{count} goal configurations are more than the {limit} a block may generate")]
+    TooManyConfigurations { at: Loc, count: String, limit: u64 },
+    #[error("the sequence does not match order `{order}`")]
+    SequenceMismatch {
+        at: Loc,
+        order: String,
+        left_out: Vec<String>,
+        not_selected: Vec<String>,
+    },
+    #[error("product `{product}` is not selected by order `{order}`")]
+    NotSelected {
+        at: Loc,
+        product: String,
+        order: String,
+    },
+    #[error("product `{product}` cannot be both packed by a worker and missing")]
+    PackedAndMissing { at: Loc, product: String },
+    /// A bug: an artifact could not be serialised.
+    #[error("internal error: {what}")]
+    Internal { what: String },
+}
+
+impl Error {
+    /// A stable code, documented in the README.
+    pub fn code(&self) -> &'static str {
+        match self {
+            Error::Read { .. } => "E009",
+            Error::Syntax { error, .. } => error.code(),
+            Error::UseMissing { .. } => "E010",
+            Error::UseCycle { .. } => "E011",
+            Error::RobotFileMissing { .. } => "E012",
+            Error::Duplicate { .. } => "E020",
+            Error::Unknown { .. } => "E021",
+            Error::MissingStatement { .. } => "E022",
+            Error::StatementTwice { .. } => "E023",
+            Error::SlotBeforeBox { .. } => "E024",
+            Error::BadGeometry { .. } => "E025",
+            Error::SlotOutsideBox { .. } => "E030",
+            Error::SlotsOverlap { .. } => "E031",
+            Error::SlotTaken { .. } => "E032",
+            Error::ListedTwice { .. } => "E033",
+            Error::OutsidePending { .. } => "E034",
+            Error::ProductsOverlap { .. } => "E035",
+            Error::OutOfReach { .. } => "E036",
+            Error::DoesNotFit { .. } => "E037",
+            Error::PlacedOverlap { .. } => "E038",
+            Error::ChooseTooMany { .. } => "E040",
+            Error::Zero { .. } => "E041",
+            Error::FractionOutOfRange { .. } => "E042",
+            Error::RangeTooLarge { .. } => "E043",
+            Error::RangesTooLarge { .. } => "E044",
+            Error::JitterImpossible { .. } => "E045",
+            Error::KeepsNothing { .. } => "E046",
+            Error::TooManyConfigurations { .. } => "E047",
+            Error::SequenceMismatch { .. } => "E050",
+            Error::NotSelected { .. } => "E051",
+            Error::PackedAndMissing { .. } => "E052",
+            Error::Internal { .. } => "E099",
+        }
+    }
+
+    /// Where the caret goes; `None` for errors about a whole file.
+    pub fn at(&self) -> Option<Loc> {
+        match self {
+            Error::Read { .. } | Error::Internal { .. } => None,
+            Error::Syntax { at, .. }
+            | Error::UseMissing { at, .. }
+            | Error::UseCycle { at, .. }
+            | Error::RobotFileMissing { at, .. }
+            | Error::Duplicate { at, .. }
+            | Error::Unknown { at, .. }
+            | Error::MissingStatement { at, .. }
+            | Error::StatementTwice { at, .. }
+            | Error::SlotBeforeBox { at, .. }
+            | Error::BadGeometry { at, .. }
+            | Error::SlotOutsideBox { at, .. }
+            | Error::SlotsOverlap { at, .. }
+            | Error::SlotTaken { at, .. }
+            | Error::ListedTwice { at, .. }
+            | Error::OutsidePending { at, .. }
+            | Error::ProductsOverlap { at, .. }
+            | Error::OutOfReach { at, .. }
+            | Error::DoesNotFit { at, .. }
+            | Error::PlacedOverlap { at, .. }
+            | Error::ChooseTooMany { at, .. }
+            | Error::Zero { at, .. }
+            | Error::FractionOutOfRange { at, .. }
+            | Error::RangeTooLarge { at, .. }
+            | Error::RangesTooLarge { at, .. }
+            | Error::JitterImpossible { at, .. }
+            | Error::KeepsNothing { at, .. }
+            | Error::TooManyConfigurations { at, .. }
+            | Error::SequenceMismatch { at, .. }
+            | Error::NotSelected { at, .. }
+            | Error::PackedAndMissing { at, .. } => Some(*at),
+        }
+    }
+
+    /// The short text under the caret.
+    pub fn label(&self) -> String {
+        match self {
+            Error::Read { .. } | Error::Internal { .. } => String::new(),
+            Error::Syntax { error, .. } => error.label(),
+            Error::UseMissing { .. } => "this file cannot be read".into(),
+            Error::UseCycle { .. } => "this `use` closes the cycle".into(),
+            Error::RobotFileMissing { .. } => "this file cannot be read".into(),
+            Error::Duplicate { .. } => "defined again here".into(),
+            Error::Unknown { scope, .. } => format!("not found in {scope}"),
+            Error::MissingStatement { .. } => "in this block".into(),
+            Error::StatementTwice { .. } => "given again here".into(),
+            Error::SlotBeforeBox { .. } => "no box declared above this slot".into(),
+            Error::BadGeometry { .. } => "here".into(),
+            Error::SlotOutsideBox { by_mm, .. } => format!("{by_mm:.0} mm outside the box"),
+            Error::SlotsOverlap { .. } => "too close to the other slot".into(),
+            Error::SlotTaken { .. } => "slot already taken".into(),
+            Error::ListedTwice { .. } => "listed again here".into(),
+            Error::OutsidePending { by_mm, .. } => {
+                format!("{by_mm:.0} mm outside the pending area")
+            }
+            Error::ProductsOverlap { .. } => "overlaps another product".into(),
+            Error::OutOfReach { distance, min, .. } if distance < min => {
+                "too close to the base".into()
+            }
+            Error::OutOfReach { .. } => "too far from the base".into(),
+            Error::DoesNotFit { .. } => "does not fit".into(),
+            Error::PlacedOverlap { .. } => "these products would collide in the box".into(),
+            Error::ChooseTooMany { .. } => "too many".into(),
+            Error::Zero { .. } => "must be 1 or more".into(),
+            Error::FractionOutOfRange { .. } => "not in (0, 1]".into(),
+            Error::RangeTooLarge { .. } => "range out of bounds".into(),
+            Error::RangesTooLarge { .. } => "together these exceed the selection".into(),
+            Error::JitterImpossible { .. } => "this jitter is too large".into(),
+            Error::KeepsNothing { .. } => "keeps nothing".into(),
+            Error::TooManyConfigurations { .. } => "too many configurations".into(),
+            Error::SequenceMismatch { .. } => "this sequence".into(),
+            Error::NotSelected { .. } => "not in the order".into(),
+            Error::PackedAndMissing { .. } => "both packed and missing".into(),
+        }
+    }
+
+    /// Secondary places: (where, what it is).
+    pub fn notes(&self) -> Vec<(Loc, String)> {
+        match self {
+            Error::Duplicate { first, .. } => vec![(*first, "first defined here".into())],
+            Error::StatementTwice { first, .. } => vec![(*first, "first given here".into())],
+            Error::SlotsOverlap { first, .. } => vec![(*first, "the other slot".into())],
+            Error::SlotTaken { first, .. } => vec![(*first, "first put in the slot here".into())],
+            Error::ListedTwice { first, .. } => vec![(*first, "first listed here".into())],
+            Error::ProductsOverlap { other, .. } => vec![(*other, "the other product".into())],
+            _ => Vec::new(),
+        }
+    }
+
+    /// How to fix it.
+    pub fn help(&self) -> Option<String> {
+        Some(match self {
+            Error::Read { .. } => "check the path and the file's permissions".into(),
+            Error::Syntax { error, .. } => return error.help(),
+            Error::UseMissing { .. } => "`use` paths are relative to the file that uses them".into(),
+            Error::UseCycle { .. } => "remove one of the `use` lines; a file cannot use itself, even through others".into(),
+            Error::RobotFileMissing { .. } => "the path is relative to the file that names it".into(),
+            Error::Duplicate { kind, .. } => format!("rename one of the two; every {kind} needs its own name"),
+            Error::Unknown {
+                suggestion: Some(s), ..
+            } => format!("did you mean `{s}`?"),
+            Error::Unknown { known, kind, .. } if known.is_empty() => format!("define the {kind} first"),
+            Error::Unknown { known, kind, .. } => {
+                let mut list = known.iter().take(12).map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", ");
+                if known.len() > 12 {
+                    list.push_str(", ...");
+                }
+                format!("known {kind}s: {list}")
+            }
+            Error::MissingStatement { example, .. } => format!("add a line such as `{example}`"),
+            Error::StatementTwice { .. } => "keep only one of them".into(),
+            Error::SlotBeforeBox { .. } => "declare the `box` before its slots: a slot belongs to the box above it".into(),
+            Error::BadGeometry { fix, .. } => fix.clone(),
+            Error::SlotOutsideBox { .. } => "move the slot inside the box footprint (box centre ± width/2, ± depth/2)".into(),
+            Error::SlotsOverlap { .. } => "slots must be at least 10 mm apart; move or remove one".into(),
+            Error::SlotTaken { .. } => "give each product its own slot".into(),
+            Error::ListedTwice { .. } => "remove the second one".into(),
+            Error::OutsidePending { .. } => "move the product so that its whole footprint is inside the `pending` area, or enlarge the area".into(),
+            Error::ProductsOverlap { .. } => "move one of them; footprints (centre ± half the width and depth) must not overlap".into(),
+            Error::OutOfReach { min, max, .. } => format!("the UR10 reaches between {min:.2} m and {max:.2} m from its base axis; move it or the `base`"),
+            Error::DoesNotFit { .. } => "move the slot further from the box wall, use a larger box, or put a smaller product there".into(),
+            Error::PlacedOverlap { .. } => "move the slots further apart".into(),
+            Error::ChooseTooMany { .. } => "lower N, or list more products and slots".into(),
+            Error::Zero { .. } => "write a number of 1 or more".into(),
+            Error::FractionOutOfRange { .. } => "write a training ratio such as `keep 0.6`; `keep 1` keeps every combination".into(),
+            Error::RangeTooLarge { n, .. } => format!("write `A to B` with A <= B <= {n}"),
+            Error::RangesTooLarge { .. } => "lower one of the two upper bounds".into(),
+            Error::JitterImpossible { .. } => "lower the jitter, space the products further apart, or enlarge the pending area".into(),
+            Error::KeepsNothing { .. } => "raise `keep`".into(),
+            Error::TooManyConfigurations { .. } => "choose fewer products or slots, or lower `keep`".into(),
+            Error::SequenceMismatch {
+                left_out,
+                not_selected,
+                ..
+            } => {
+                let mut parts = Vec::new();
+                if !left_out.is_empty() {
+                    parts.push(format!("add {}", quoted(left_out)));
+                }
+                if !not_selected.is_empty() {
+                    parts.push(format!("remove {} (not in the order)", quoted(not_selected)));
+                }
+                format!("{}: a demo's sequence names every product of its order exactly once", parts.join("; "))
+            }
+            Error::NotSelected { .. } => "a worker can only pack products the order selects".into(),
+            Error::PackedAndMissing { .. } => "remove it from one of the two lists".into(),
+            Error::Internal { .. } => "please report this bug with the input that caused it".into(),
+        })
+    }
+}
+
+fn quoted(names: &[String]) -> String {
+    names
+        .iter()
+        .map(|n| format!("`{n}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}

@@ -1,0 +1,519 @@
+//! Phase 4: expand `demo`/`demos` blocks into demonstrations and
+//! `scenario`/`scenarios` blocks into test cases, deterministically.
+//!
+//! Every generated block draws from its own ChaCha8 generator seeded with
+//! the block's `seed` (`rand_chacha::ChaCha8Rng::seed_from_u64`), in this
+//! documented order, so the same file gives the same bytes everywhere:
+//! - `demos`: (1) if `keep` < 1, one shuffle of the combination list; then
+//!   for each kept configuration and each repeat: (2) human-packed and
+//!   missing products, (3) jitter, (4) a random sequence.
+//! - `scenarios`, per case: (1) the N-combination, (2) its slots, (3)
+//!   human-packed and (4) missing products, (5) jitter.
+//! - `scenario`: (1) jitter.
+
+use crate::error::Error;
+use crate::model::*;
+use crate::source::Loc;
+use packwright_grammar::ast::SequenceMode;
+use rand::seq::{SliceRandom, index};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// A block may generate at most this many demonstrations or cases.
+pub const MAX_GENERATED: u64 = 1_000_000;
+/// Redraws of one product's jitter before giving up.
+pub const JITTER_TRIES: u32 = 100;
+
+/// The state of one package before the robot starts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Setup {
+    pub inventory: usize,
+    /// (inventory entry, cell slot) for every selected product, in
+    /// inventory order.
+    pub assignment: Vec<(usize, usize)>,
+    /// Entries already in their slots (a worker packed them).
+    pub human_packed: Vec<usize>,
+    /// Entries absent from the cell.
+    pub missing: Vec<usize>,
+    /// Per inventory entry, where it stands in the pending area.
+    pub positions: Vec<[f64; 2]>,
+}
+
+impl Setup {
+    pub fn slot_of(&self, entry: usize) -> Option<usize> {
+        self.assignment
+            .iter()
+            .find(|(e, _)| *e == entry)
+            .map(|(_, s)| *s)
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Demonstration {
+    /// Index into [`Expanded::blocks`].
+    pub block: usize,
+    pub setup: Setup,
+    /// Entries the demonstrator handled, in order.
+    pub sequence: Vec<usize>,
+}
+
+#[derive(Debug, Clone)]
+pub struct DemoBlock {
+    pub name: String,
+    /// `demo` or `demos`.
+    pub kind: &'static str,
+    pub inventory: usize,
+    pub order: Option<usize>,
+    /// Goal configurations the block spans (before `keep`).
+    pub configurations: u64,
+    /// Kept and held-out combinations (inventory entries), for `demos`.
+    pub kept: Vec<Vec<usize>>,
+    pub held_out: Vec<Vec<usize>>,
+    pub first_demo: usize,
+    pub demos: usize,
+}
+
+#[derive(Debug, Clone)]
+pub struct Case {
+    pub name: String,
+    pub setup: Setup,
+}
+
+#[derive(Debug, Clone)]
+pub struct Suite {
+    pub name: String,
+    /// `scenario` or `scenarios`.
+    pub kind: &'static str,
+    pub inventory: usize,
+    pub order: Option<usize>,
+    pub seed: u64,
+    pub cases: Vec<Case>,
+}
+
+#[derive(Debug, Clone, Default)]
+pub struct Expanded {
+    pub blocks: Vec<DemoBlock>,
+    pub demonstrations: Vec<Demonstration>,
+    pub suites: Vec<Suite>,
+}
+
+pub fn expand(m: &Model) -> Result<Expanded, Vec<Error>> {
+    let mut out = Expanded::default();
+    let mut errors = Vec::new();
+    for d in &m.demos {
+        let order = &m.orders[d.order];
+        let mut positions: Vec<[f64; 2]> = m.inventories[order.inventory]
+            .entries
+            .iter()
+            .map(|e| e.at)
+            .collect();
+        for p in &d.at {
+            positions[p.entry] = p.at;
+        }
+        out.blocks.push(DemoBlock {
+            name: d.name.clone(),
+            kind: "demo",
+            inventory: order.inventory,
+            order: Some(d.order),
+            configurations: 1,
+            kept: Vec::new(),
+            held_out: Vec::new(),
+            first_demo: out.demonstrations.len(),
+            demos: 1,
+        });
+        out.demonstrations.push(Demonstration {
+            block: out.blocks.len() - 1,
+            setup: Setup {
+                inventory: order.inventory,
+                assignment: order.assignment.iter().map(|a| (a.entry, a.slot)).collect(),
+                human_packed: Vec::new(),
+                missing: Vec::new(),
+                positions,
+            },
+            sequence: d.sequence.clone(),
+        });
+    }
+    for d in &m.demo_sets {
+        if let Err(e) = demo_set(m, d, &mut out) {
+            errors.push(e);
+        }
+    }
+    for s in &m.scenarios {
+        match scenario(m, s) {
+            Ok(suite) => out.suites.push(suite),
+            Err(e) => errors.push(e),
+        }
+    }
+    for s in &m.scenario_sets {
+        match scenario_set(m, s) {
+            Ok(suite) => out.suites.push(suite),
+            Err(e) => errors.push(e),
+        }
+    }
+    if errors.is_empty() {
+        Ok(out)
+    } else {
+        Err(errors)
+    }
+}
+
+/// All k-combinations of 0..n in lexicographic order.
+pub fn combinations(n: usize, k: usize) -> Vec<Vec<usize>> {
+    let mut out = Vec::new();
+    if k > n {
+        return out;
+    }
+    let mut c: Vec<usize> = (0..k).collect();
+    loop {
+        out.push(c.clone());
+        let Some(i) = (0..k).rev().find(|&i| c[i] < n - k + i) else {
+            return out;
+        };
+        c[i] += 1;
+        for j in i + 1..k {
+            c[j] = c[j - 1] + 1;
+        }
+    }
+}
+
+/// All ordered k-tuples of distinct elements of 0..n, in lexicographic order.
+pub fn arrangements(n: usize, k: usize) -> Vec<Vec<usize>> {
+    fn go(n: usize, k: usize, cur: &mut Vec<usize>, out: &mut Vec<Vec<usize>>) {
+        if cur.len() == k {
+            out.push(cur.clone());
+            return;
+        }
+        for i in 0..n {
+            if !cur.contains(&i) {
+                cur.push(i);
+                go(n, k, cur, out);
+                cur.pop();
+            }
+        }
+    }
+    let mut out = Vec::new();
+    if k <= n {
+        go(n, k, &mut Vec::with_capacity(k), &mut out);
+    }
+    out
+}
+
+/// C(n, k) x n!/(n-k)! without overflow (saturating).
+fn count_configurations(products: usize, slots: usize, n: usize) -> u128 {
+    let mut c: u128 = 1;
+    for i in 0..n as u128 {
+        c = c.saturating_mul(products as u128 - i) / (i + 1);
+    }
+    let mut p: u128 = 1;
+    for i in 0..n as u128 {
+        p = p.saturating_mul(slots as u128 - i);
+    }
+    c.saturating_mul(p)
+}
+
+fn demo_set(m: &Model, d: &DemosDef, out: &mut Expanded) -> Result<(), Error> {
+    let c = &d.choose;
+    let total = count_configurations(c.entries.len(), c.slots.len(), c.n);
+    if total.saturating_mul(d.repeat as u128) > MAX_GENERATED as u128 {
+        return Err(Error::TooManyConfigurations {
+            at: c.loc,
+            count: total.saturating_mul(d.repeat as u128).to_string(),
+            limit: MAX_GENERATED,
+        });
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(d.seed);
+    let combos = combinations(c.entries.len(), c.n);
+    let n_combos = combos.len();
+    let keep = ((d.keep * n_combos as f64).round() as usize).min(n_combos);
+    if keep == 0 {
+        return Err(Error::KeepsNothing {
+            at: c.loc,
+            fraction: d.keep,
+            combinations: n_combos as u64,
+        });
+    }
+    let mut order: Vec<usize> = (0..n_combos).collect();
+    if keep < n_combos {
+        order.shuffle(&mut rng);
+    }
+    let mut kept_idx = order[..keep].to_vec();
+    let mut held_idx = order[keep..].to_vec();
+    kept_idx.sort_unstable();
+    held_idx.sort_unstable();
+    let as_entries =
+        |i: &usize| -> Vec<usize> { combos[*i].iter().map(|&j| c.entries[j]).collect() };
+    let slot_tuples = arrangements(c.slots.len(), c.n);
+    let inv = &m.inventories[d.inventory];
+    let block = out.blocks.len();
+    let first_demo = out.demonstrations.len();
+    for ci in &kept_idx {
+        let products = as_entries(ci);
+        for tuple in &slot_tuples {
+            let mut assignment: Vec<(usize, usize)> = products
+                .iter()
+                .zip(tuple)
+                .map(|(&e, &s)| (e, c.slots[s]))
+                .collect();
+            assignment.sort_unstable();
+            for _ in 0..d.repeat {
+                let selected: Vec<usize> = assignment.iter().map(|(e, _)| *e).collect();
+                let (human_packed, missing) = draw_absent(&mut rng, &selected, d.human, d.missing);
+                let positions = jitter(m, inv, &human_packed, &missing, d.jitter, &mut rng)
+                    .map_err(|product| {
+                        jitter_error(m, inv, product, d.jitter_loc.unwrap_or(d.loc))
+                    })?;
+                let mut sequence: Vec<usize> = selected
+                    .iter()
+                    .copied()
+                    .filter(|e| !human_packed.contains(e) && !missing.contains(e))
+                    .collect();
+                match d.sequence {
+                    SequenceMode::Ascending => {}
+                    SequenceMode::Descending => sequence.reverse(),
+                    SequenceMode::Listed => {
+                        sequence.sort_by_key(|e| c.entries.iter().position(|x| x == e));
+                    }
+                    SequenceMode::Random => sequence.shuffle(&mut rng),
+                }
+                out.demonstrations.push(Demonstration {
+                    block,
+                    setup: Setup {
+                        inventory: d.inventory,
+                        assignment: assignment.clone(),
+                        human_packed,
+                        missing,
+                        positions,
+                    },
+                    sequence,
+                });
+            }
+        }
+    }
+    out.blocks.push(DemoBlock {
+        name: d.name.clone(),
+        kind: "demos",
+        inventory: d.inventory,
+        order: None,
+        configurations: u64::try_from(total).unwrap_or(u64::MAX),
+        kept: kept_idx.iter().map(as_entries).collect(),
+        held_out: held_idx.iter().map(as_entries).collect(),
+        first_demo,
+        demos: out.demonstrations.len() - first_demo,
+    });
+    Ok(())
+}
+
+/// Draws which selected entries a worker packed and which are missing.
+fn draw_absent(
+    rng: &mut ChaCha8Rng,
+    selected: &[usize],
+    human: CountRange,
+    missing: CountRange,
+) -> (Vec<usize>, Vec<usize>) {
+    let mut packed = Vec::new();
+    if human.loc.is_some() {
+        let k = rng.random_range(human.low..=human.high).min(selected.len());
+        packed = index::sample(rng, selected.len(), k)
+            .into_iter()
+            .map(|i| selected[i])
+            .collect();
+        packed.sort_unstable();
+    }
+    let mut absent = Vec::new();
+    if missing.loc.is_some() {
+        let rest: Vec<usize> = selected
+            .iter()
+            .copied()
+            .filter(|e| !packed.contains(e))
+            .collect();
+        let k = rng.random_range(missing.low..=missing.high).min(rest.len());
+        absent = index::sample(rng, rest.len(), k)
+            .into_iter()
+            .map(|i| rest[i])
+            .collect();
+        absent.sort_unstable();
+    }
+    (packed, absent)
+}
+
+/// Jittered positions of the products standing in the pending area (not
+/// packed, not missing), in inventory order: x and y each offset uniformly
+/// in [-j, j], redrawn while the footprint leaves the pending area or
+/// overlaps a product placed before it. Returns the entry that could not be
+/// placed.
+fn jitter(
+    m: &Model,
+    inv: &Inventory,
+    packed: &[usize],
+    missing: &[usize],
+    j: f64,
+    rng: &mut ChaCha8Rng,
+) -> Result<Vec<[f64; 2]>, usize> {
+    jitter_from(
+        m,
+        inv,
+        inv.entries.iter().map(|e| e.at).collect(),
+        packed,
+        missing,
+        j,
+        rng,
+    )
+}
+
+fn jitter_from(
+    m: &Model,
+    inv: &Inventory,
+    mut positions: Vec<[f64; 2]>,
+    packed: &[usize],
+    missing: &[usize],
+    j: f64,
+    rng: &mut ChaCha8Rng,
+) -> Result<Vec<[f64; 2]>, usize> {
+    if j <= 0.0 {
+        return Ok(positions);
+    }
+    let pending = m.cells[inv.cell].pending;
+    let mut placed: Vec<usize> = Vec::new();
+    for (i, e) in inv.entries.iter().enumerate() {
+        if packed.contains(&i) || missing.contains(&i) {
+            continue;
+        }
+        let product = &m.products[e.product];
+        let nominal = positions[i];
+        let mut ok = false;
+        for _ in 0..JITTER_TRIES {
+            let p = [
+                nominal[0] + rng.random_range(-j..=j),
+                nominal[1] + rng.random_range(-j..=j),
+            ];
+            let fp = product.footprint(p);
+            if pending.excess(&fp) > 0.0 {
+                continue;
+            }
+            if placed
+                .iter()
+                .any(|&o| fp.overlaps(&m.products[inv.entries[o].product].footprint(positions[o])))
+            {
+                continue;
+            }
+            positions[i] = p;
+            ok = true;
+            break;
+        }
+        if !ok {
+            return Err(i);
+        }
+        placed.push(i);
+    }
+    Ok(positions)
+}
+
+fn jitter_error(m: &Model, inv: &Inventory, entry: usize, at: Loc) -> Error {
+    Error::JitterImpossible {
+        at,
+        product: m.products[inv.entries[entry].product].name.clone(),
+        tries: JITTER_TRIES,
+    }
+}
+
+fn scenario(m: &Model, s: &ScenarioDef) -> Result<Suite, Error> {
+    let order = &m.orders[s.order];
+    let inv = &m.inventories[order.inventory];
+    let mut positions: Vec<[f64; 2]> = inv.entries.iter().map(|e| e.at).collect();
+    for p in &s.at {
+        positions[p.entry] = p.at;
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
+    let mut packed = s.human_packed.clone();
+    let mut missing = s.missing.clone();
+    packed.sort_unstable();
+    missing.sort_unstable();
+    let positions = jitter_from(m, inv, positions, &packed, &missing, s.jitter, &mut rng)
+        .map_err(|e| jitter_error(m, inv, e, s.jitter_loc.unwrap_or(s.loc)))?;
+    Ok(Suite {
+        name: s.name.clone(),
+        kind: "scenario",
+        inventory: order.inventory,
+        order: Some(s.order),
+        seed: s.seed,
+        cases: vec![Case {
+            name: s.name.clone(),
+            setup: Setup {
+                inventory: order.inventory,
+                assignment: order.assignment.iter().map(|a| (a.entry, a.slot)).collect(),
+                human_packed: packed,
+                missing,
+                positions,
+            },
+        }],
+    })
+}
+
+fn scenario_set(m: &Model, s: &ScenariosDef) -> Result<Suite, Error> {
+    if s.count as u64 > MAX_GENERATED {
+        return Err(Error::TooManyConfigurations {
+            at: s.loc,
+            count: s.count.to_string(),
+            limit: MAX_GENERATED,
+        });
+    }
+    let c = &s.choose;
+    let inv = &m.inventories[s.inventory];
+    let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
+    let width = s.count.to_string().len();
+    let mut cases = Vec::with_capacity(s.count);
+    for i in 0..s.count {
+        let mut chosen = index::sample(&mut rng, c.entries.len(), c.n).into_vec();
+        chosen.sort_unstable();
+        let slots = index::sample(&mut rng, c.slots.len(), c.n).into_vec();
+        let mut assignment: Vec<(usize, usize)> = chosen
+            .iter()
+            .zip(&slots)
+            .map(|(&p, &sl)| (c.entries[p], c.slots[sl]))
+            .collect();
+        assignment.sort_unstable();
+        let selected: Vec<usize> = assignment.iter().map(|(e, _)| *e).collect();
+        let (human_packed, missing) = draw_absent(&mut rng, &selected, s.human, s.missing);
+        let positions = jitter(m, inv, &human_packed, &missing, s.jitter, &mut rng)
+            .map_err(|e| jitter_error(m, inv, e, s.jitter_loc.unwrap_or(s.loc)))?;
+        cases.push(Case {
+            name: format!("{}/{:0width$}", s.name, i + 1),
+            setup: Setup {
+                inventory: s.inventory,
+                assignment,
+                human_packed,
+                missing,
+                positions,
+            },
+        });
+    }
+    Ok(Suite {
+        name: s.name.clone(),
+        kind: "scenarios",
+        inventory: s.inventory,
+        order: None,
+        seed: s.seed,
+        cases,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn combinatorics() {
+        assert_eq!(combinations(5, 3).len(), 10);
+        assert_eq!(combinations(3, 2), vec![vec![0, 1], vec![0, 2], vec![1, 2]]);
+        assert_eq!(arrangements(3, 3).len(), 6);
+        assert_eq!(arrangements(3, 2).len(), 6);
+        assert_eq!(
+            arrangements(4, 2)[0..3],
+            [vec![0, 1], vec![0, 2], vec![0, 3]]
+        );
+        assert_eq!(count_configurations(5, 3, 3), 60);
+        assert_eq!(count_configurations(5, 4, 4), 120);
+        assert_eq!(count_configurations(3, 3, 2), 18);
+        assert!(combinations(2, 3).is_empty());
+    }
+}

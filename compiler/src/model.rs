@@ -1,0 +1,252 @@
+//! The resolved world: every name replaced by an index, every length in
+//! metres, defaults filled in. Built by `resolve`, checked by `validate`,
+//! expanded by `expand`.
+//!
+//! Invariants (after a clean `resolve`): every index points into the vector
+//! it names; an inventory's entries are in the listed order, which is the
+//! node order of every graph; slots are numbered in declaration order and a
+//! slot's label is its index + 1 (label 0 is `pick`).
+
+use crate::source::Loc;
+use packwright_grammar::ast::SequenceMode;
+
+/// Lift height when a cell gives none.
+pub const DEFAULT_LIFT: f64 = 0.150;
+/// UR10 reach, measured horizontally from the base axis.
+pub const UR10_REACH_MIN: f64 = 0.20;
+pub const UR10_REACH_MAX: f64 = 1.30;
+
+#[derive(Debug, Clone, Default)]
+pub struct Model {
+    pub cells: Vec<Cell>,
+    pub products: Vec<Product>,
+    pub inventories: Vec<Inventory>,
+    pub orders: Vec<Order>,
+    pub demos: Vec<DemoDef>,
+    pub demo_sets: Vec<DemosDef>,
+    pub scenarios: Vec<ScenarioDef>,
+    pub scenario_sets: Vec<ScenariosDef>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum RobotModel {
+    Ur10,
+    /// Path relative to the working directory (the cell file's folder joined
+    /// with the path written).
+    Urdf(String),
+}
+
+/// An axis-aligned rectangle on the table.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rect {
+    pub min: [f64; 2],
+    pub max: [f64; 2],
+}
+
+impl Rect {
+    pub fn centred(c: [f64; 2], w: f64, d: f64) -> Rect {
+        Rect {
+            min: [c[0] - w / 2.0, c[1] - d / 2.0],
+            max: [c[0] + w / 2.0, c[1] + d / 2.0],
+        }
+    }
+
+    /// How far `inner` sticks out of `self` (0 when inside), in metres.
+    pub fn excess(&self, inner: &Rect) -> f64 {
+        [
+            self.min[0] - inner.min[0],
+            self.min[1] - inner.min[1],
+            inner.max[0] - self.max[0],
+            inner.max[1] - self.max[1],
+        ]
+        .into_iter()
+        .fold(0.0, f64::max)
+    }
+
+    /// True when the two share some area (touching edges do not count).
+    pub fn overlaps(&self, other: &Rect) -> bool {
+        const EPS: f64 = 1e-9;
+        self.min[0] < other.max[0] - EPS
+            && other.min[0] < self.max[0] - EPS
+            && self.min[1] < other.max[1] - EPS
+            && other.min[1] < self.max[1] - EPS
+    }
+
+    pub fn contains(&self, p: [f64; 2]) -> bool {
+        p[0] >= self.min[0] && p[0] <= self.max[0] && p[1] >= self.min[1] && p[1] <= self.max[1]
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Cell {
+    pub name: String,
+    pub loc: Loc,
+    pub robot: RobotModel,
+    pub base: [f64; 3],
+    pub suction: f64,
+    pub pending: Rect,
+    pub lift: f64,
+    pub boxes: Vec<BoxDef>,
+    pub slots: Vec<Slot>,
+}
+
+#[derive(Debug, Clone)]
+pub struct BoxDef {
+    pub name: String,
+    pub loc: Loc,
+    pub centre: [f64; 2],
+    /// Width (x), depth (y), height (z).
+    pub size: [f64; 3],
+}
+
+impl BoxDef {
+    pub fn footprint(&self) -> Rect {
+        Rect::centred(self.centre, self.size[0], self.size[1])
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Slot {
+    pub name: String,
+    pub loc: Loc,
+    pub at: [f64; 2],
+    /// Index into the cell's boxes.
+    pub box_index: usize,
+}
+
+#[derive(Debug, Clone)]
+pub struct Product {
+    pub name: String,
+    pub loc: Loc,
+    /// Width (x), depth (y), height (z).
+    pub size: [f64; 3],
+    pub mass: Option<f64>,
+}
+
+impl Product {
+    pub fn footprint(&self, at: [f64; 2]) -> Rect {
+        Rect::centred(at, self.size[0], self.size[1])
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Inventory {
+    pub name: String,
+    pub loc: Loc,
+    pub cell: usize,
+    pub entries: Vec<Entry>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Entry {
+    pub product: usize,
+    pub at: [f64; 2],
+    pub loc: Loc,
+}
+
+#[derive(Debug, Clone)]
+pub struct Order {
+    pub name: String,
+    pub loc: Loc,
+    pub inventory: usize,
+    pub customer: Option<String>,
+    pub batch: Option<u64>,
+    pub assignment: Vec<Assign>,
+}
+
+/// One selected product and its slot.
+#[derive(Debug, Clone)]
+pub struct Assign {
+    /// Index into the inventory's entries.
+    pub entry: usize,
+    /// Index into the cell's slots.
+    pub slot: usize,
+    pub loc: Loc,
+}
+
+#[derive(Debug, Clone)]
+pub struct DemoDef {
+    pub name: String,
+    pub loc: Loc,
+    pub order: usize,
+    /// Inventory entries in the demonstrated order.
+    pub sequence: Vec<usize>,
+    pub at: Vec<Placed>,
+}
+
+/// A product stood somewhere other than its inventory position.
+#[derive(Debug, Clone)]
+pub struct Placed {
+    pub entry: usize,
+    pub at: [f64; 2],
+    pub loc: Loc,
+}
+
+#[derive(Debug, Clone)]
+pub struct Choose {
+    pub n: usize,
+    /// Inventory entries, as listed.
+    pub entries: Vec<usize>,
+    /// Cell slots, as listed.
+    pub slots: Vec<usize>,
+    pub loc: Loc,
+}
+
+/// Inclusive range of a count, with where it was written.
+#[derive(Debug, Clone, Copy)]
+pub struct CountRange {
+    pub low: usize,
+    pub high: usize,
+    pub loc: Option<Loc>,
+}
+
+impl CountRange {
+    pub const NONE: CountRange = CountRange {
+        low: 0,
+        high: 0,
+        loc: None,
+    };
+}
+
+#[derive(Debug, Clone)]
+pub struct DemosDef {
+    pub name: String,
+    pub loc: Loc,
+    pub inventory: usize,
+    pub choose: Choose,
+    pub keep: f64,
+    pub jitter: f64,
+    pub jitter_loc: Option<Loc>,
+    pub sequence: SequenceMode,
+    pub repeat: usize,
+    pub seed: u64,
+    pub human: CountRange,
+    pub missing: CountRange,
+}
+
+#[derive(Debug, Clone)]
+pub struct ScenarioDef {
+    pub name: String,
+    pub loc: Loc,
+    pub order: usize,
+    pub human_packed: Vec<usize>,
+    pub missing: Vec<usize>,
+    pub jitter: f64,
+    pub jitter_loc: Option<Loc>,
+    pub seed: u64,
+    pub at: Vec<Placed>,
+}
+
+#[derive(Debug, Clone)]
+pub struct ScenariosDef {
+    pub name: String,
+    pub loc: Loc,
+    pub inventory: usize,
+    pub choose: Choose,
+    pub human: CountRange,
+    pub missing: CountRange,
+    pub jitter: f64,
+    pub jitter_loc: Option<Loc>,
+    pub count: usize,
+    pub seed: u64,
+}

@@ -1,0 +1,270 @@
+//! Phase 3: geometric checks on the resolved model. Every check runs and
+//! reports; nothing here stops at the first error.
+
+use crate::error::Error;
+use crate::model::*;
+use crate::source::Loc;
+
+/// Slots closer than this are taken for the same slot.
+pub const MIN_SLOT_DISTANCE: f64 = 0.010;
+
+pub fn validate(m: &Model) -> Vec<Error> {
+    let mut errors = Vec::new();
+    for cell in &m.cells {
+        check_cell(cell, &mut errors);
+    }
+    for inv in &m.inventories {
+        let positions: Vec<[f64; 2]> = inv.entries.iter().map(|e| e.at).collect();
+        let locs: Vec<Loc> = inv.entries.iter().map(|e| e.loc).collect();
+        check_layout(m, inv, &positions, &locs, &mut errors, None);
+    }
+    for order in &m.orders {
+        let inv = &m.inventories[order.inventory];
+        let pairs: Vec<(usize, usize, Loc)> = order
+            .assignment
+            .iter()
+            .map(|a| (a.entry, a.slot, a.loc))
+            .collect();
+        check_placement(m, inv, &pairs, &mut errors);
+    }
+    for demo in &m.demos {
+        let inv = &m.inventories[m.orders[demo.order].inventory];
+        check_overrides(m, inv, &demo.at, &mut errors);
+    }
+    for sc in &m.scenarios {
+        let inv = &m.inventories[m.orders[sc.order].inventory];
+        check_overrides(m, inv, &sc.at, &mut errors);
+    }
+    for d in &m.demo_sets {
+        check_choose(m, &m.inventories[d.inventory], &d.choose, &mut errors);
+    }
+    for s in &m.scenario_sets {
+        check_choose(m, &m.inventories[s.inventory], &s.choose, &mut errors);
+    }
+    errors
+}
+
+fn distance_to_base(cell: &Cell, p: [f64; 2]) -> f64 {
+    ((p[0] - cell.base[0]).powi(2) + (p[1] - cell.base[1]).powi(2)).sqrt()
+}
+
+/// The UR10's reach; other arms are checked by inverse kinematics at run time.
+fn check_reach(cell: &Cell, p: [f64; 2], at: Loc, what: String, errors: &mut Vec<Error>) {
+    if cell.robot != RobotModel::Ur10 {
+        return;
+    }
+    let d = distance_to_base(cell, p);
+    if !(UR10_REACH_MIN..=UR10_REACH_MAX).contains(&d) {
+        errors.push(Error::OutOfReach {
+            at,
+            what,
+            distance: d,
+            min: UR10_REACH_MIN,
+            max: UR10_REACH_MAX,
+        });
+    }
+}
+
+fn check_cell(cell: &Cell, errors: &mut Vec<Error>) {
+    for b in &cell.boxes {
+        if b.footprint().overlaps(&cell.pending) {
+            errors.push(Error::BadGeometry {
+                at: b.loc,
+                what: format!("box `{}` overlaps the pending area", b.name),
+                fix: "move the box or the pending area apart".into(),
+            });
+        }
+    }
+    for (i, s) in cell.slots.iter().enumerate() {
+        let b = &cell.boxes[s.box_index];
+        let excess = b.footprint().excess(&Rect {
+            min: s.at,
+            max: s.at,
+        });
+        if excess > 0.0 {
+            errors.push(Error::SlotOutsideBox {
+                at: s.loc,
+                slot: s.name.clone(),
+                box_name: b.name.clone(),
+                by_mm: excess * 1000.0,
+            });
+        }
+        for t in &cell.slots[..i] {
+            let d = ((s.at[0] - t.at[0]).powi(2) + (s.at[1] - t.at[1]).powi(2)).sqrt();
+            if d < MIN_SLOT_DISTANCE {
+                errors.push(Error::SlotsOverlap {
+                    at: s.loc,
+                    first: t.loc,
+                    a: t.name.clone(),
+                    b: s.name.clone(),
+                    distance_mm: d * 1000.0,
+                });
+            }
+        }
+        check_reach(cell, s.at, s.loc, format!("slot `{}`", s.name), errors);
+    }
+}
+
+/// Products at `positions` (one per inventory entry): inside the pending
+/// area, apart, within reach. `only` restricts the checks to some entries
+/// (the ones a demo or scenario moved).
+fn check_layout(
+    m: &Model,
+    inv: &Inventory,
+    positions: &[[f64; 2]],
+    locs: &[Loc],
+    errors: &mut Vec<Error>,
+    only: Option<&[usize]>,
+) {
+    let cell = &m.cells[inv.cell];
+    let checked = |i: usize| only.is_none_or(|o| o.contains(&i));
+    for (i, e) in inv.entries.iter().enumerate() {
+        if !checked(i) {
+            continue;
+        }
+        let product = &m.products[e.product];
+        let fp = product.footprint(positions[i]);
+        let excess = cell.pending.excess(&fp);
+        if excess > 0.0 {
+            errors.push(Error::OutsidePending {
+                at: locs[i],
+                product: product.name.clone(),
+                cell: cell.name.clone(),
+                by_mm: excess * 1000.0,
+            });
+        }
+        for (j, other) in inv.entries.iter().enumerate() {
+            // Each pair once: against earlier entries, or any entry not checked.
+            if j == i || (j > i && checked(j)) {
+                continue;
+            }
+            let op = &m.products[other.product];
+            if fp.overlaps(&op.footprint(positions[j])) {
+                errors.push(Error::ProductsOverlap {
+                    at: locs[i],
+                    other: locs[j],
+                    a: product.name.clone(),
+                    b: op.name.clone(),
+                });
+            }
+        }
+        check_reach(
+            cell,
+            positions[i],
+            locs[i],
+            format!("product `{}`", product.name),
+            errors,
+        );
+    }
+}
+
+fn check_overrides(m: &Model, inv: &Inventory, placed: &[Placed], errors: &mut Vec<Error>) {
+    if placed.is_empty() {
+        return;
+    }
+    let mut positions: Vec<[f64; 2]> = inv.entries.iter().map(|e| e.at).collect();
+    let mut locs: Vec<Loc> = inv.entries.iter().map(|e| e.loc).collect();
+    for p in placed {
+        positions[p.entry] = p.at;
+        locs[p.entry] = p.loc;
+    }
+    let moved: Vec<usize> = placed.iter().map(|p| p.entry).collect();
+    check_layout(m, inv, &positions, &locs, errors, Some(&moved));
+}
+
+/// How far a product in a slot would stick out of the slot's box (0 if not).
+fn fit_excess(cell: &Cell, product: &Product, slot: usize) -> f64 {
+    let s = &cell.slots[slot];
+    cell.boxes[s.box_index]
+        .footprint()
+        .excess(&product.footprint(s.at))
+}
+
+/// Each (product, slot) pair fits its box, and no two placed products overlap.
+fn check_placement(
+    m: &Model,
+    inv: &Inventory,
+    pairs: &[(usize, usize, Loc)],
+    errors: &mut Vec<Error>,
+) {
+    let cell = &m.cells[inv.cell];
+    for (i, &(entry, slot, at)) in pairs.iter().enumerate() {
+        let product = &m.products[inv.entries[entry].product];
+        let excess = fit_excess(cell, product, slot);
+        if excess > 0.0 {
+            errors.push(Error::DoesNotFit {
+                at,
+                product: product.name.clone(),
+                slot: cell.slots[slot].name.clone(),
+                box_name: cell.boxes[cell.slots[slot].box_index].name.clone(),
+                by_mm: excess * 1000.0,
+            });
+        }
+        for &(other, other_slot, _) in &pairs[..i] {
+            let op = &m.products[inv.entries[other].product];
+            if product
+                .footprint(cell.slots[slot].at)
+                .overlaps(&op.footprint(cell.slots[other_slot].at))
+            {
+                errors.push(Error::PlacedOverlap {
+                    at,
+                    a: op.name.clone(),
+                    slot_a: cell.slots[other_slot].name.clone(),
+                    b: product.name.clone(),
+                    slot_b: cell.slots[slot].name.clone(),
+                });
+            }
+        }
+    }
+}
+
+/// A generator may put any listed product into any listed slot: every pair
+/// must fit, and every two products in every two slots must not overlap.
+/// Reported once per product (fit) and once per slot pair (overlap).
+fn check_choose(m: &Model, inv: &Inventory, c: &Choose, errors: &mut Vec<Error>) {
+    let cell = &m.cells[inv.cell];
+    let product = |e: usize| &m.products[inv.entries[e].product];
+    for &e in &c.entries {
+        if let Some((&slot, excess)) = c
+            .slots
+            .iter()
+            .map(|s| (s, fit_excess(cell, product(e), *s)))
+            .find(|(_, x)| *x > 0.0)
+        {
+            errors.push(Error::DoesNotFit {
+                at: c.loc,
+                product: product(e).name.clone(),
+                slot: cell.slots[slot].name.clone(),
+                box_name: cell.boxes[cell.slots[slot].box_index].name.clone(),
+                by_mm: excess * 1000.0,
+            });
+        }
+    }
+    if c.n < 2 {
+        return;
+    }
+    for (i, &s) in c.slots.iter().enumerate() {
+        for &t in &c.slots[..i] {
+            let clash = c.entries.iter().find_map(|&a| {
+                c.entries
+                    .iter()
+                    .filter(|&&b| b != a)
+                    .find(|&&b| {
+                        product(a)
+                            .footprint(cell.slots[t].at)
+                            .overlaps(&product(b).footprint(cell.slots[s].at))
+                    })
+                    .map(|&b| (a, b))
+            });
+            if let Some((a, b)) = clash {
+                errors.push(Error::PlacedOverlap {
+                    at: c.loc,
+                    a: product(a).name.clone(),
+                    slot_a: cell.slots[t].name.clone(),
+                    b: product(b).name.clone(),
+                    slot_b: cell.slots[s].name.clone(),
+                });
+            }
+        }
+    }
+}

@@ -1,0 +1,23 @@
+//! `packwright check`: diagnostics only.
+
+use super::{report_failure, summary_line};
+use crate::Exit;
+use crate::cli::CheckArgs;
+use crate::fsio::FsLoader;
+
+pub fn run(args: &CheckArgs) -> anyhow::Result<Exit> {
+    match packwright_compiler::check(&FsLoader, &args.files) {
+        Ok(compiled) => {
+            if args.json {
+                println!(
+                    "{}",
+                    serde_json::json!({"type": "summary", "errors": 0, "files": compiled.sources.files().count()})
+                );
+            } else {
+                eprintln!("ok: {}", summary_line(&compiled));
+            }
+            Ok(Exit::Success)
+        }
+        Err(failed) => Ok(report_failure(&failed, args.json)),
+    }
+}

@@ -1,0 +1,43 @@
+//! `packwright fmt`: canonical layout.
+
+use crate::Exit;
+use crate::cli::FmtArgs;
+use crate::fsio::write_file_atomically;
+use anyhow::Context;
+use packwright_compiler::{Error, Loc, SourceMap, diagnostic};
+
+pub fn run(args: &FmtArgs) -> anyhow::Result<Exit> {
+    let mut exit = Exit::Success;
+    for path in &args.files {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        let formatted = match packwright_grammar::format(&text) {
+            Ok(f) => f,
+            Err(errors) => {
+                let mut sources = SourceMap::default();
+                let id = sources.add(path.clone(), text);
+                for error in errors {
+                    let e = Error::Syntax {
+                        at: Loc::new(id, error.span()),
+                        error,
+                    };
+                    eprint!("{}", diagnostic::render(&sources, &e));
+                }
+                exit = Exit::Diagnostics;
+                continue;
+            }
+        };
+        if args.stdout {
+            print!("{formatted}");
+        } else if formatted != text {
+            if args.check {
+                println!("{}", path.display());
+                exit = Exit::Diagnostics;
+            } else {
+                write_file_atomically(path, formatted.as_bytes())?;
+                eprintln!("formatted {}", path.display());
+            }
+        }
+    }
+    Ok(exit)
+}

@@ -1,0 +1,55 @@
+//! One module per subcommand.
+
+pub mod check;
+pub mod compile;
+pub mod fmt;
+pub mod show;
+
+use crate::Exit;
+use packwright_compiler::{Compiled, Failed, diagnostic};
+
+/// Prints a failed compilation's diagnostics (text on stderr, or JSON Lines
+/// on stdout) and picks the exit code.
+pub fn report_failure(failed: &Failed, json: bool) -> Exit {
+    if json {
+        for e in &failed.errors {
+            let mut value =
+                serde_json::to_value(diagnostic::to_json(&failed.sources, e)).unwrap_or_default();
+            if let Some(obj) = value.as_object_mut() {
+                obj.insert("type".into(), "diagnostic".into());
+            }
+            println!("{value}");
+        }
+        println!(
+            "{}",
+            serde_json::json!({"type": "summary", "errors": failed.errors.len(), "files": failed.sources.files().count()})
+        );
+    } else {
+        eprint!("{}", failed.render());
+        let n = failed.errors.len();
+        eprintln!("\n{n} error{} found", if n == 1 { "" } else { "s" });
+    }
+    if failed.is_io() {
+        Exit::Failure
+    } else {
+        Exit::Diagnostics
+    }
+}
+
+/// One line that says what a clean compilation holds.
+pub fn summary_line(c: &Compiled) -> String {
+    let m = &c.model;
+    let x = &c.expanded;
+    format!(
+        "{} files: {} cells, {} products, {} inventories, {} orders, {} demonstrations ({} samples), {} scenarios in {} suites",
+        c.sources.files().count(),
+        m.cells.len(),
+        m.products.len(),
+        m.inventories.len(),
+        m.orders.len(),
+        x.demonstrations.len(),
+        c.graphs.s,
+        x.suites.iter().map(|s| s.cases.len()).sum::<usize>(),
+        x.suites.len(),
+    )
+}

@@ -1,0 +1,107 @@
+//! File-system edge: the compiler's [`Loader`] on real files, and atomic
+//! writes (write a temporary sibling, sync it, rename it into place).
+
+use anyhow::{Context, bail};
+use packwright_compiler::{Artifact, Loader};
+use std::fs;
+use std::io::{ErrorKind, Write};
+use std::path::{Path, PathBuf};
+
+/// Reads source files from disk.
+pub struct FsLoader;
+
+impl Loader for FsLoader {
+    fn read(&self, path: &Path) -> Result<String, String> {
+        fs::read_to_string(path).map_err(|e| match e.kind() {
+            ErrorKind::NotFound => "no such file".to_owned(),
+            ErrorKind::InvalidData => "not UTF-8 text".to_owned(),
+            _ => e.to_string(),
+        })
+    }
+}
+
+fn sibling(path: &Path, tag: &str) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let parent = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    parent.join(format!(".{name}.{tag}-{}", std::process::id()))
+}
+
+fn write_synced(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let mut f =
+        fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    f.write_all(bytes)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    f.sync_all()
+        .with_context(|| format!("cannot sync {}", path.display()))?;
+    Ok(())
+}
+
+/// Replaces `path` with `bytes` atomically.
+pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let tmp = sibling(path, "tmp");
+    write_synced(&tmp, bytes)?;
+    fs::rename(&tmp, path)
+        .with_context(|| format!("cannot replace {}", path.display()))
+        .inspect_err(|_| {
+            let _ = fs::remove_file(&tmp);
+        })
+}
+
+/// True if `dir` may be replaced: it holds nothing, or earlier artifacts.
+fn replaceable(dir: &Path) -> anyhow::Result<bool> {
+    let mut entries =
+        fs::read_dir(dir).with_context(|| format!("cannot read {}", dir.display()))?;
+    Ok(entries.next().is_none() || dir.join("manifest.json").is_file())
+}
+
+/// Writes the artifacts into `dir`: first into a temporary sibling
+/// directory, then swapped into place, so that `dir` is never half-written.
+pub fn write_dir_atomically(dir: &Path, artifacts: &[Artifact]) -> anyhow::Result<()> {
+    if dir.exists() {
+        if !dir.is_dir() {
+            bail!("{} exists and is not a directory", dir.display());
+        }
+        if !replaceable(dir)? {
+            bail!(
+                "refusing to replace {}: it is not empty and holds no manifest.json from an earlier compile",
+                dir.display()
+            );
+        }
+    }
+    if let Some(parent) = dir.parent().filter(|p| !p.as_os_str().is_empty()) {
+        fs::create_dir_all(parent)
+            .with_context(|| format!("cannot create {}", parent.display()))?;
+    }
+    let tmp = sibling(dir, "tmp");
+    let _ = fs::remove_dir_all(&tmp);
+    fs::create_dir(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+    let written = artifacts
+        .iter()
+        .try_for_each(|a| write_synced(&tmp.join(a.name), &a.bytes));
+    if let Err(e) = written {
+        let _ = fs::remove_dir_all(&tmp);
+        return Err(e);
+    }
+    if dir.exists() {
+        let old = sibling(dir, "old");
+        let _ = fs::remove_dir_all(&old);
+        fs::rename(dir, &old).with_context(|| format!("cannot move {} aside", dir.display()))?;
+        if let Err(e) = fs::rename(&tmp, dir) {
+            let _ = fs::rename(&old, dir);
+            let _ = fs::remove_dir_all(&tmp);
+            return Err(e)
+                .with_context(|| format!("cannot move the new {} into place", dir.display()));
+        }
+        let _ = fs::remove_dir_all(&old);
+    } else {
+        fs::rename(&tmp, dir)
+            .with_context(|| format!("cannot move the new {} into place", dir.display()))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,37 @@
+//! The `packwright` command line: argument parsing, file IO and output.
+//! The language and compiler live in `packwright-grammar` and
+//! `packwright-compiler`; this crate is the edge where files are read and
+//! written.
+
+pub mod cli;
+pub mod commands;
+pub mod fsio;
+
+use std::process::ExitCode;
+
+/// Documented exit codes (as ripgrep: 0 success, 1 "found something", 2
+/// trouble).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Exit {
+    /// Everything is fine.
+    Success = 0,
+    /// The input has diagnostics, or `fmt --check` found files to format.
+    Diagnostics = 1,
+    /// Bad usage, unreadable input, a failed write, or an internal error.
+    Failure = 2,
+}
+
+impl From<Exit> for ExitCode {
+    fn from(e: Exit) -> ExitCode {
+        ExitCode::from(e as u8)
+    }
+}
+
+pub fn run(cli: cli::Cli) -> anyhow::Result<Exit> {
+    match cli.command {
+        cli::Command::Check(args) => commands::check::run(&args),
+        cli::Command::Compile(args) => commands::compile::run(&args),
+        cli::Command::Show(args) => commands::show::run(&args),
+        cli::Command::Fmt(args) => commands::fmt::run(&args),
+    }
+}
