@@ -3,6 +3,25 @@
 //! `packwright-compiler`; this crate is the edge where files are read and
 //! written.
 
+/// Like `print!`/`println!`/`eprint!`/`eprintln!`, but a closed pipe
+/// (`packwright show out | head`) is not a panic: output just stops.
+#[macro_export]
+macro_rules! out {
+    ($($t:tt)*) => {{ use std::io::Write as _; let _ = write!(std::io::stdout().lock(), $($t)*); }};
+}
+#[macro_export]
+macro_rules! outln {
+    ($($t:tt)*) => {{ use std::io::Write as _; let _ = writeln!(std::io::stdout().lock(), $($t)*); }};
+}
+#[macro_export]
+macro_rules! err {
+    ($($t:tt)*) => {{ use std::io::Write as _; let _ = write!(std::io::stderr().lock(), $($t)*); }};
+}
+#[macro_export]
+macro_rules! errln {
+    ($($t:tt)*) => {{ use std::io::Write as _; let _ = writeln!(std::io::stderr().lock(), $($t)*); }};
+}
+
 pub mod cli;
 pub mod commands;
 pub mod fsio;

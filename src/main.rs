@@ -3,6 +3,7 @@
 
 use clap::Parser;
 use packwright::cli::Cli;
+use packwright::errln;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -10,7 +11,7 @@ fn main() -> ExitCode {
     match packwright::run(cli) {
         Ok(code) => code.into(),
         Err(e) => {
-            eprintln!("error: {e:#}");
+            errln!("error: {e:#}");
             packwright::Exit::Failure.into()
         }
     }

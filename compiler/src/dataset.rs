@@ -129,22 +129,18 @@ fn push(
     stage: u8,
     demo: usize,
 ) {
-    for col in 0..g.m {
-        match state.get(col) {
-            Some(p) => {
-                g.nodes.extend([
-                    p[0] as f32,
-                    p[1] as f32,
-                    p[2] as f32,
-                    f32::from(u8::from(selected[col])),
-                ]);
-                g.node_mask.push(1);
-            }
-            None => {
-                g.nodes.extend([0.0; 4]);
-                g.node_mask.push(0);
-            }
-        }
+    for (col, p) in state.iter().enumerate() {
+        g.nodes.extend([
+            p[0] as f32,
+            p[1] as f32,
+            p[2] as f32,
+            f32::from(u8::from(selected[col])),
+        ]);
+        g.node_mask.push(1);
+    }
+    for _ in state.len()..g.m {
+        g.nodes.extend([0.0; 4]);
+        g.node_mask.push(0);
     }
     g.goal.extend(goal.map(|v| v as f32));
     g.target.push(target);

@@ -339,12 +339,12 @@ impl Error {
                 suggestion: Some(s), ..
             } => format!("did you mean `{s}`?"),
             Error::Unknown { known, kind, .. } if known.is_empty() => format!("define the {kind} first"),
-            Error::Unknown { known, kind, .. } => {
+            Error::Unknown { known, scope, .. } => {
                 let mut list = known.iter().take(12).map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", ");
                 if known.len() > 12 {
                     list.push_str(", ...");
                 }
-                format!("known {kind}s: {list}")
+                format!("{scope} has {list}")
             }
             Error::MissingStatement { example, .. } => format!("add a line such as `{example}`"),
             Error::StatementTwice { .. } => "keep only one of them".into(),

@@ -76,12 +76,19 @@ impl Table {
                     self.kind,
                     name,
                     file,
-                    format!("the {}s", self.kind),
+                    format!("the {}", plural(self.kind)),
                     &self.listed,
                 ));
                 None
             }
         }
+    }
+}
+
+fn plural(kind: &str) -> String {
+    match kind.strip_suffix('y') {
+        Some(stem) => format!("{stem}ies"),
+        None => format!("{kind}s"),
     }
 }
 
@@ -237,13 +244,14 @@ impl Resolver<'_> {
         false
     }
 
-    /// A table position: `(x, y)`; a z would be meaningless there.
+    /// A position on the table: `(x, y)`, or `(x, y, 0)`. Products stand
+    /// on the table and box floors lie on it, so another height is an error.
     fn table_point(&mut self, p: &ast::Point, f: FileId) -> [f64; 2] {
-        if let Some(z) = &p.z {
+        if let Some(z) = p.z.as_ref().filter(|z| z.metres != 0.0) {
             self.errors.push(Error::BadGeometry {
                 at: Loc::new(f, z.span),
-                what: "positions on the table take no height".into(),
-                fix: "write `(x, y)`: products stand on the table, slots on the box floor".into(),
+                what: "this position is on the table, at z = 0".into(),
+                fix: "write `(x, y)` or `(x, y, 0)`: products stand on the table and box floors lie on it".into(),
             });
         }
         xy(p)

@@ -35,8 +35,18 @@ pub fn parse(src: &str) -> Result<File, Vec<SyntaxError>> {
 
 type P<'i> = Pair<'i, Rule>;
 
+/// The span of a pair without the blanks and comments that pest's implicit
+/// whitespace may have consumed after its last token.
 fn span(p: &P) -> Span {
-    Span::new(p.as_span().start(), p.as_span().end())
+    let start = p.as_span().start();
+    let end = p
+        .clone()
+        .into_inner()
+        .flatten()
+        .map(|k| k.as_span().end())
+        .max()
+        .unwrap_or(p.as_span().end());
+    Span::new(start, end)
 }
 
 fn is_punct(rule: Rule) -> bool {
@@ -309,7 +319,7 @@ impl Builder {
                     CellStmt::Pending(from, to)
                 }
                 Rule::box_stmt => {
-                    let size = self.point(k.remove(4));
+                    let size = self.size(k.remove(4));
                     let at = self.point(k.remove(2));
                     CellStmt::Box {
                         name: name(&k[1]),
@@ -350,7 +360,7 @@ impl Builder {
                 }
                 Rule::box_shape => {
                     if let Some(q) = kids(k).nth(1) {
-                        shape = Some(Shape::Box(self.point(q)));
+                        shape = Some(Shape::Box(self.size(q)));
                     }
                 }
                 Rule::mass_clause => {
@@ -578,10 +588,21 @@ impl Builder {
         (product, at.unwrap_or_else(|| zero_point(s)))
     }
 
+    /// A position: coordinates may be any size.
     fn point(&mut self, p: P) -> Point {
+        self.point_with(p, false)
+    }
+
+    /// A size `(w, d, h)`: a bare number above a few metres is taken for a
+    /// forgotten unit.
+    fn size(&mut self, p: P) -> Point {
+        self.point_with(p, true)
+    }
+
+    fn point_with(&mut self, p: P, is_size: bool) -> Point {
         let s = span(&p);
         let mut qs = kids(p)
-            .map(|q| self.length(q))
+            .map(|q| self.length_with(q, is_size))
             .collect::<Vec<_>>()
             .into_iter();
         let x = qs.next().unwrap_or_else(|| zero_length(s));
@@ -619,11 +640,17 @@ impl Builder {
         (number, value, unit, s)
     }
 
+    /// A size-like length (cube edge, suction, lift, jitter).
+    /// A size-like length (cube edge, suction, lift, jitter).
     fn length(&mut self, p: P) -> Length {
+        self.length_with(p, true)
+    }
+
+    fn length_with(&mut self, p: P, is_size: bool) -> Length {
         let (number, value, unit, s) = self.quantity(p);
         let unit = match unit {
             None => {
-                if value.abs() > MAX_BARE_METRES {
+                if is_size && value.abs() > MAX_BARE_METRES {
                     self.errors.push(SyntaxError::MissingUnit {
                         span: s,
                         number: number.clone(),

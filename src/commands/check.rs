@@ -9,12 +9,12 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<Exit> {
     match packwright_compiler::check(&FsLoader, &args.files) {
         Ok(compiled) => {
             if args.json {
-                println!(
+                outln!(
                     "{}",
                     serde_json::json!({"type": "summary", "errors": 0, "files": compiled.sources.files().count()})
                 );
             } else {
-                eprintln!("ok: {}", summary_line(&compiled));
+                errln!("ok: {}", summary_line(&compiled));
             }
             Ok(Exit::Success)
         }

@@ -16,7 +16,7 @@ pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
             .iter()
             .map(|a| serde_json::json!({"name": a.name, "bytes": a.bytes.len()}))
             .collect();
-        println!(
+        outln!(
             "{}",
             serde_json::json!({
                 "output": args.output.display().to_string(),
@@ -28,7 +28,7 @@ pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
             })
         );
     } else {
-        println!(
+        outln!(
             "wrote {}: {}",
             args.output.display(),
             summary_line(&compiled)

@@ -21,21 +21,21 @@ pub fn run(args: &FmtArgs) -> anyhow::Result<Exit> {
                         at: Loc::new(id, error.span()),
                         error,
                     };
-                    eprint!("{}", diagnostic::render(&sources, &e));
+                    err!("{}", diagnostic::render(&sources, &e));
                 }
                 exit = Exit::Diagnostics;
                 continue;
             }
         };
         if args.stdout {
-            print!("{formatted}");
+            out!("{formatted}");
         } else if formatted != text {
             if args.check {
-                println!("{}", path.display());
+                outln!("{}", path.display());
                 exit = Exit::Diagnostics;
             } else {
                 write_file_atomically(path, formatted.as_bytes())?;
-                eprintln!("formatted {}", path.display());
+                errln!("formatted {}", path.display());
             }
         }
     }

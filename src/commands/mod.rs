@@ -18,16 +18,16 @@ pub fn report_failure(failed: &Failed, json: bool) -> Exit {
             if let Some(obj) = value.as_object_mut() {
                 obj.insert("type".into(), "diagnostic".into());
             }
-            println!("{value}");
+            outln!("{value}");
         }
-        println!(
+        outln!(
             "{}",
             serde_json::json!({"type": "summary", "errors": failed.errors.len(), "files": failed.sources.files().count()})
         );
     } else {
-        eprint!("{}", failed.render());
+        err!("{}", failed.render());
         let n = failed.errors.len();
-        eprintln!("\n{n} error{} found", if n == 1 { "" } else { "s" });
+        errln!("\n{n} error{} found", if n == 1 { "" } else { "s" });
     }
     if failed.is_io() {
         Exit::Failure

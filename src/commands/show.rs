@@ -125,7 +125,7 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
                     "seed": s.seed, "cases": s.cases.len(), "cases_with_human_packed": human, "cases_with_missing": missing})
             }).collect::<Vec<_>>(),
         });
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        outln!("{}", serde_json::to_string_pretty(&value)?);
         return Ok(Exit::Success);
     }
 
@@ -314,6 +314,6 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
             writeln!(o, "{line}")?;
         }
     }
-    print!("{o}");
+    out!("{o}");
     Ok(Exit::Success)
 }
