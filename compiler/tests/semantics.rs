@@ -1,0 +1,312 @@
+//! The compiler's documented semantics, on in-memory files.
+
+use packwright_compiler::{Compiled, Error, MemoryLoader, check};
+use std::path::PathBuf;
+
+const CELL: &str = "
+cell bench {
+  robot ur10
+  base (0, 0, 0)
+  suction 100 mm
+  pending (0.45, -0.50) to (0.85, -0.10)
+  box tray (0.00, 0.65) size (0.40, 0.30, 0.08)
+  slot g1 (-0.12, 0.58)
+  slot g2 ( 0.00, 0.58)
+  slot g3 ( 0.12, 0.58)
+  slot g4 (-0.06, 0.72)
+  lift 200 mm
+}
+product A cube 50 mm
+product B cube 50 mm
+product C cube 40 mm
+product D cube 50 mm
+product E box (60 mm, 40 mm, 30 mm)
+inventory stock5 for bench {
+  A (0.50, -0.20)
+  B (0.62, -0.20)
+  C (0.74, -0.20)
+  D (0.56, -0.38)
+  E (0.68, -0.38)
+}
+";
+
+fn compile(extra: &str) -> Result<Compiled, Vec<Error>> {
+    let loader = MemoryLoader::new().with("main.pack", format!("{CELL}\n{extra}"));
+    check(&loader, &[PathBuf::from("main.pack")]).map_err(|f| f.errors)
+}
+
+fn ok(extra: &str) -> Compiled {
+    match compile(extra) {
+        Ok(c) => c,
+        Err(errors) => panic!("unexpected errors: {errors:#?}"),
+    }
+}
+
+fn codes(extra: &str) -> Vec<&'static str> {
+    compile(extra)
+        .err()
+        .unwrap_or_default()
+        .iter()
+        .map(Error::code)
+        .collect()
+}
+
+#[test]
+fn sample_count_is_configurations_times_repeat_times_n_times_two() {
+    let c = ok("demos t for stock5 {\n choose 3 of A, B, C, D, E into g1, g2, g3\n repeat 2\n}\n");
+    // C(5,3) = 10 combinations x 3! slot assignments = 60 configurations.
+    assert_eq!(c.expanded.demonstrations.len(), 60 * 2);
+    assert_eq!(c.graphs.s, 60 * 2 * 3 * 2);
+    assert_eq!(c.graphs.m, 5);
+    assert_eq!(c.graphs.edges(), 8);
+}
+
+#[test]
+fn slot_lists_longer_than_n_give_injective_assignments() {
+    let c = ok("demos t for stock5 {\n choose 2 of A, B, C into g1, g2, g3\n}\n");
+    // C(3,2) x 3x2 ordered slot pairs.
+    assert_eq!(c.expanded.demonstrations.len(), 18);
+}
+
+#[test]
+fn keep_holds_out_combinations_deterministically() {
+    let src =
+        "demos t for stock5 {\n choose 3 of A, B, C, D, E into g1, g2, g3\n keep 0.6\n seed 7\n}\n";
+    let a = ok(src);
+    let block = &a.expanded.blocks[0];
+    assert_eq!(block.kept.len(), 6);
+    assert_eq!(block.held_out.len(), 4);
+    assert_eq!(a.expanded.demonstrations.len(), 6 * 6);
+    for h in &block.held_out {
+        assert!(!block.kept.contains(h));
+    }
+    let b = ok(src);
+    assert_eq!(b.expanded.blocks[0].kept, block.kept);
+    let other_seed = ok(&src.replace("seed 7", "seed 8"));
+    let kept_sets: Vec<_> = (0..20)
+        .map(|s| {
+            ok(&src.replace("seed 7", &format!("seed {s}")))
+                .expanded
+                .blocks[0]
+                .kept
+                .clone()
+        })
+        .collect();
+    assert!(
+        kept_sets.iter().any(|k| *k != block.kept),
+        "the seed changes what is kept"
+    );
+    assert_eq!(other_seed.expanded.blocks[0].kept.len(), 6);
+}
+
+#[test]
+fn picking_and_placing_samples_follow_the_definition() {
+    let c = ok("order o for stock5 {\n C -> g1\n A -> g3\n}\ndemo d for o {\n sequence A, C\n}\n");
+    let g = &c.graphs;
+    assert_eq!(g.s, 4);
+    let node = |s: usize, n: usize| &g.nodes[(s * g.m + n) * 4..(s * g.m + n) * 4 + 4];
+    // Picking A: A at rest, target A's node, label pick.
+    assert_eq!((g.stage[0], g.target[0], g.label[0]), (0, 0, 0));
+    assert_eq!(node(0, 0), &[0.50, -0.20, 0.025, 1.0]);
+    assert_eq!(node(0, 1)[3], 0.0, "B is not selected");
+    assert_eq!(&g.goal[0..3], &[0.12, 0.58, 0.025]);
+    // Placing A: raised by the lift (200 mm), target M = the box, label of g3.
+    assert_eq!((g.stage[1], g.target[1], g.label[1]), (1, 5, 3));
+    assert!((node(1, 0)[2] - 0.225).abs() < 1e-6);
+    // Picking C: A now rests in g3.
+    assert_eq!(node(2, 0), &[0.12, 0.58, 0.025, 1.0]);
+    assert_eq!((g.target[2], g.label[2]), (2, 0));
+    assert_eq!(&g.goal[6..9], &[-0.12, 0.58, 0.02]);
+    assert_eq!(g.label[3], 1);
+    assert!(g.node_mask.iter().all(|&m| m == 1));
+}
+
+#[test]
+fn missing_products_have_no_node_and_are_padded() {
+    let c = ok(
+        "demos t for stock5 {\n choose 3 of A, B, C, D, E into g1, g2, g3\n missing 1 to 1\n seed 4\n}\n\
+         demos full for stock5 {\n choose 1 of A into g1\n}\n",
+    );
+    let g = &c.graphs;
+    assert_eq!(g.m, 5);
+    for (i, d) in c.expanded.demonstrations.iter().enumerate() {
+        let (first, n) = g.per_demo[i];
+        let present = 5 - d.setup.missing.len();
+        assert_eq!(n, d.sequence.len() * 2);
+        for s in first..first + n {
+            let mask = &g.node_mask[s * g.m..(s + 1) * g.m];
+            assert_eq!(mask.iter().filter(|&&m| m == 1).count(), present);
+            assert!(
+                mask[..present].iter().all(|&m| m == 1),
+                "present nodes come first"
+            );
+        }
+        assert!(d.sequence.iter().all(|e| !d.setup.missing.contains(e)));
+    }
+    assert!(
+        c.expanded
+            .demonstrations
+            .iter()
+            .any(|d| d.setup.missing.len() == 1)
+    );
+}
+
+#[test]
+fn sequence_modes() {
+    let c = ok(
+        "demos asc for stock5 {\n choose 3 of E, A, C into g1, g2, g3\n sequence ascending\n}\n\
+         demos desc for stock5 {\n choose 3 of E, A, C into g1, g2, g3\n sequence descending\n}\n\
+         demos lst for stock5 {\n choose 3 of E, A, C into g1, g2, g3\n sequence listed\n}\n\
+         demos rnd for stock5 {\n choose 3 of E, A, C into g1, g2, g3\n sequence random\n seed 1\n}\n",
+    );
+    let seq = |block: usize| {
+        let b = &c.expanded.blocks[block];
+        c.expanded.demonstrations[b.first_demo..b.first_demo + b.demos]
+            .iter()
+            .map(|d| d.sequence.clone())
+            .collect::<Vec<_>>()
+    };
+    // Entries: A=0, C=2, E=4.
+    assert!(seq(0).iter().all(|s| *s == [0, 2, 4]));
+    assert!(seq(1).iter().all(|s| *s == [4, 2, 0]));
+    assert!(seq(2).iter().all(|s| *s == [4, 0, 2]));
+    let random = seq(3);
+    assert!(
+        random.iter().any(|s| *s != random[0]),
+        "a random order varies"
+    );
+}
+
+#[test]
+fn jitter_stays_in_bounds_and_apart() {
+    let c = ok(
+        "scenarios s for stock5 {\n choose 3 of A, B, C, D, E into g1, g2, g3\n jitter 20 mm\n count 200\n seed 5\n}\n",
+    );
+    let m = &c.model;
+    let inv = &m.inventories[0];
+    let pending = m.cells[0].pending;
+    let suite = &c.expanded.suites[0];
+    assert_eq!(suite.cases.len(), 200);
+    let mut moved = false;
+    for case in &suite.cases {
+        let fps: Vec<_> = inv
+            .entries
+            .iter()
+            .enumerate()
+            .map(|(i, e)| {
+                let p = case.setup.positions[i];
+                assert!(
+                    (p[0] - e.at[0]).abs() <= 0.020 + 1e-12
+                        && (p[1] - e.at[1]).abs() <= 0.020 + 1e-12
+                );
+                moved |= p != e.at;
+                m.products[e.product].footprint(p)
+            })
+            .collect();
+        for (i, a) in fps.iter().enumerate() {
+            assert_eq!(pending.excess(a), 0.0);
+            for b in &fps[..i] {
+                assert!(!a.overlaps(b));
+            }
+        }
+        assert_eq!(case.setup.assignment.len(), 3);
+    }
+    assert!(moved);
+}
+
+#[test]
+fn scenario_ranges_are_respected() {
+    let c = ok(
+        "scenarios s for stock5 {\n choose 4 of A, B, C, D, E into g1, g2, g3, g4\n human packs 1 to 2\n missing 0 to 1\n count 300\n seed 12\n}\n",
+    );
+    let cases = &c.expanded.suites[0].cases;
+    let mut seen = std::collections::BTreeSet::new();
+    for case in cases {
+        let s = &case.setup;
+        assert!((1..=2).contains(&s.human_packed.len()));
+        assert!(s.missing.len() <= 1);
+        for e in s.human_packed.iter().chain(&s.missing) {
+            assert!(
+                s.slot_of(*e).is_some(),
+                "only selected products are packed or missing"
+            );
+        }
+        assert!(s.human_packed.iter().all(|e| !s.missing.contains(e)));
+        seen.insert((s.human_packed.len(), s.missing.len()));
+    }
+    assert_eq!(
+        seen.len(),
+        4,
+        "every combination of counts occurs in 300 draws"
+    );
+}
+
+#[test]
+fn every_independent_error_is_reported() {
+    let got = codes(
+        "order o for stock5 {\n A -> g1\n B -> g1\n F -> g2\n}\n\
+         demos t for stock5 {\n choose 6 of A, B into g1\n keep 1.5\n}\n\
+         scenarios s for stok5 {\n count 3\n}\n",
+    );
+    for code in ["E032", "E021", "E040", "E042"] {
+        assert!(got.contains(&code), "{code} missing from {got:?}");
+    }
+    assert!(got.len() >= 5, "{got:?}");
+}
+
+#[test]
+fn unknown_names_suggest_close_ones() {
+    let errors = compile("order o for stok5 {\n A -> g1\n}\n")
+        .err()
+        .unwrap_or_default();
+    match errors.first() {
+        Some(Error::Unknown { suggestion, .. }) => {
+            assert_eq!(suggestion.as_deref(), Some("stock5"))
+        }
+        other => panic!("expected an unknown-name error, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_use_is_relative_to_the_using_file_and_loaded_once() {
+    let loader = MemoryLoader::new()
+        .with("cells/bench.pack", CELL)
+        .with(
+            "orders/a.pack",
+            "use \"../cells/bench.pack\"\norder a for stock5 {\n A -> g1\n}\n",
+        )
+        .with(
+            "orders/b.pack",
+            "use \"../cells/./bench.pack\"\norder b for stock5 {\n B -> g1\n}\n",
+        );
+    let c = check(
+        &loader,
+        &[
+            PathBuf::from("orders/a.pack"),
+            PathBuf::from("orders/b.pack"),
+        ],
+    )
+    .expect("compiles");
+    assert_eq!(c.sources.files().count(), 3);
+    assert_eq!(c.model.cells.len(), 1);
+}
+
+#[test]
+fn geometry_checks() {
+    assert_eq!(
+        codes("product Z cube 50 mm\ninventory i for bench {\n Z (0.46, -0.20)\n}\n"),
+        ["E034"]
+    );
+    assert_eq!(
+        codes(
+            "product Z cube 50 mm\nproduct Y cube 50 mm\ninventory i for bench {\n Z (0.60, -0.20)\n Y (0.63, -0.20)\n}\n"
+        ),
+        ["E035"]
+    );
+    assert_eq!(
+        codes(
+            "product Z box (300 mm, 40 mm, 30 mm)\ninventory i for bench {\n Z (0.65, -0.20)\n}\norder o for i {\n Z -> g1\n}\n"
+        ),
+        ["E037"]
+    );
+}

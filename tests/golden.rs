@@ -1,0 +1,298 @@
+//! Golden-file tests of the `packwright` command over the example orders and
+//! the test cases: every diagnostic in `tests/cases/err/` and the `show`
+//! summary of every file in `orders/` and `tests/cases/ok/` are insta
+//! snapshots (`tests/snapshots/`). Review changes with `cargo insta review`
+//! or by reading the `.snap.new` files.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn packwright(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_packwright"))
+        .current_dir(root())
+        .args(args)
+        .output()
+        .expect("the packwright binary runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// `.pack` files below `dir` (relative to the repository), sorted.
+fn pack_files(dir: &str) -> Vec<String> {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        let Ok(entries) = fs::read_dir(dir) else {
+            return;
+        };
+        for e in entries.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else if p.extension().is_some_and(|x| x == "pack") {
+                out.push(p);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(&root().join(dir), &mut out);
+    let mut names: Vec<String> = out
+        .iter()
+        .filter_map(|p| p.strip_prefix(root()).ok())
+        .map(|p| p.display().to_string())
+        .collect();
+    names.sort();
+    names
+}
+
+/// A fresh scratch directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("packwright-golden-{}-{name}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+fn snapshot_name(path: &str) -> String {
+    path.trim_end_matches(".pack").replace(['/', '\\'], "__")
+}
+
+fn show_of(files: &[&str], scratch_name: &str) -> String {
+    let dir = scratch(scratch_name);
+    let out = dir.join("out");
+    let out_s = out.display().to_string();
+    let mut args = vec!["compile"];
+    args.extend_from_slice(files);
+    args.extend_from_slice(&["-o", &out_s]);
+    let compiled = packwright(&args);
+    assert_eq!(
+        compiled.status.code(),
+        Some(0),
+        "compile {files:?} failed:\n{}",
+        text(&compiled.stderr)
+    );
+    let shown = packwright(&["show", &out_s]);
+    assert_eq!(
+        shown.status.code(),
+        Some(0),
+        "show failed:\n{}",
+        text(&shown.stderr)
+    );
+    let _ = fs::remove_dir_all(&dir);
+    text(&shown.stdout)
+}
+
+#[test]
+fn every_error_case_reports_its_diagnostics() {
+    let cases = pack_files("tests/cases/err");
+    assert!(
+        cases.len() >= 25,
+        "expected the error cases, found {}",
+        cases.len()
+    );
+    for case in &cases {
+        let out = packwright(&["check", case]);
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{case} should fail with diagnostics (exit 1)"
+        );
+        assert!(out.stdout.is_empty(), "{case}: diagnostics go to stderr");
+        insta::assert_snapshot!(format!("err__{}", snapshot_name(case)), text(&out.stderr));
+    }
+}
+
+#[test]
+fn every_valid_case_compiles_and_shows() {
+    let cases = pack_files("tests/cases/ok");
+    assert!(cases.len() >= 10);
+    for case in &cases {
+        let shown = show_of(&[case], &snapshot_name(case));
+        insta::assert_snapshot!(format!("ok__{}", snapshot_name(case)), shown);
+    }
+}
+
+#[test]
+fn every_example_order_compiles_and_shows() {
+    let files = pack_files("orders");
+    assert!(!files.is_empty());
+    for file in &files {
+        let shown = show_of(&[file], &snapshot_name(file));
+        insta::assert_snapshot!(snapshot_name(file), shown);
+    }
+    let all: Vec<&str> = files.iter().map(String::as_str).collect();
+    insta::assert_snapshot!("orders__all", show_of(&all, "all-orders"));
+}
+
+#[test]
+fn compiling_twice_gives_the_same_bytes() {
+    let files = pack_files("orders");
+    let dir = scratch("determinism");
+    let mut outputs = Vec::new();
+    for run in ["a", "b"] {
+        let out = dir.join(run).display().to_string();
+        let mut args = vec!["compile"];
+        args.extend(files.iter().map(String::as_str));
+        args.extend(["-o", out.as_str()]);
+        assert_eq!(packwright(&args).status.code(), Some(0));
+        outputs.push(out);
+    }
+    for name in [
+        "manifest.json",
+        "labels.json",
+        "orders.json",
+        "scenarios.json",
+        "graphs.safetensors",
+    ] {
+        let a = fs::read(Path::new(&outputs[0]).join(name)).expect("artifact");
+        let b = fs::read(Path::new(&outputs[1]).join(name)).expect("artifact");
+        assert!(!a.is_empty(), "{name} is empty");
+        assert!(
+            a == b,
+            "{name} differs between two compiles of the same input"
+        );
+    }
+    let _ = fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn compile_replaces_artifacts_but_never_other_directories() {
+    let dir = scratch("atomic");
+    let precious = dir.join("precious");
+    fs::create_dir_all(&precious).expect("dir");
+    fs::write(precious.join("notes.txt"), "keep me").expect("write");
+    let target = precious.display().to_string();
+    let refused = packwright(&["compile", "orders/cells/line2.pack", "-o", &target]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(text(&refused.stderr).contains("refusing to replace"));
+    assert_eq!(
+        fs::read_to_string(precious.join("notes.txt")).expect("kept"),
+        "keep me"
+    );
+
+    let out = dir.join("out").display().to_string();
+    assert_eq!(
+        packwright(&["compile", "orders/cells/line2.pack", "-o", &out])
+            .status
+            .code(),
+        Some(0)
+    );
+    let first = fs::read(dir.join("out/manifest.json")).expect("manifest");
+    // Replacing earlier artifacts works; a failed compile leaves them alone.
+    assert_eq!(
+        packwright(&["compile", "orders/suites/teach.pack", "-o", &out])
+            .status
+            .code(),
+        Some(0)
+    );
+    let second = fs::read(dir.join("out/manifest.json")).expect("manifest");
+    assert_ne!(first, second);
+    let failed = packwright(&["compile", "tests/cases/err/duplicate_name.pack", "-o", &out]);
+    assert_eq!(failed.status.code(), Some(1));
+    assert_eq!(
+        fs::read(dir.join("out/manifest.json")).expect("manifest"),
+        second
+    );
+    let leftovers: Vec<_> = fs::read_dir(&dir)
+        .expect("dir")
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+        .collect();
+    assert!(
+        leftovers.is_empty(),
+        "temporary directories left behind: {leftovers:?}"
+    );
+    let _ = fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn exit_codes_and_json_lines() {
+    let ok = packwright(&["check", "orders/suites/teach.pack"]);
+    assert_eq!(ok.status.code(), Some(0));
+    let missing = packwright(&["check", "no/such/file.pack"]);
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(text(&missing.stderr).contains("no such file"));
+    let usage = packwright(&["check"]);
+    assert_eq!(usage.status.code(), Some(2));
+
+    let json = packwright(&["check", "--json", "tests/cases/err/many_errors.pack"]);
+    assert_eq!(json.status.code(), Some(1));
+    let lines: Vec<serde_json::Value> = text(&json.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("each line is JSON"))
+        .collect();
+    let diagnostics = lines.iter().filter(|v| v["type"] == "diagnostic").count();
+    assert!(
+        diagnostics >= 5,
+        "many_errors.pack reports every error, got {diagnostics}"
+    );
+    let summary = lines.last().expect("a summary line");
+    assert_eq!(summary["type"], "summary");
+    assert_eq!(summary["errors"], diagnostics);
+    for d in lines.iter().filter(|v| v["type"] == "diagnostic") {
+        assert!(d["code"].as_str().is_some_and(|c| c.starts_with('E')));
+        assert!(d["line"].as_u64().is_some_and(|l| l > 0));
+        assert!(
+            d["help"].is_string(),
+            "every diagnostic says how to fix it: {d}"
+        );
+    }
+}
+
+#[test]
+fn fmt_check_then_fmt_then_clean() {
+    let dir = scratch("fmt");
+    let file = dir.join("messy.pack");
+    fs::write(
+        &file,
+        "product  A cube 50mm   # a cube\nproduct B box (60 mm,40 mm , 50 mm) mass 0.3\n",
+    )
+    .expect("write");
+    let f = file.display().to_string();
+    let check = packwright(&["fmt", "--check", &f]);
+    assert_eq!(check.status.code(), Some(1));
+    assert!(text(&check.stdout).contains("messy.pack"));
+    assert_eq!(packwright(&["fmt", &f]).status.code(), Some(0));
+    assert_eq!(
+        fs::read_to_string(&file).expect("read"),
+        "product A cube 50 mm  # a cube\nproduct B box (60 mm, 40 mm, 50 mm) mass 0.3\n"
+    );
+    assert_eq!(packwright(&["fmt", "--check", &f]).status.code(), Some(0));
+    let broken = dir.join("broken.pack");
+    fs::write(&broken, "product A cube (\n").expect("write");
+    let b = broken.display().to_string();
+    assert_eq!(packwright(&["fmt", &b]).status.code(), Some(1));
+    assert_eq!(
+        fs::read_to_string(&broken).expect("read"),
+        "product A cube (\n"
+    );
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// The canonical examples in `../shared/examples/` (present beside the
+/// repository in CI) must be accepted verbatim.
+#[test]
+fn shared_examples_compile_when_present() {
+    let shared = root().join("../shared/examples");
+    if !shared.is_dir() {
+        eprintln!("../shared/examples not found; skipped");
+        return;
+    }
+    let mut files: Vec<String> = Vec::new();
+    for sub in ["cells", "orders", "suites"] {
+        if let Ok(entries) = fs::read_dir(shared.join(sub)) {
+            files.extend(entries.flatten().map(|e| e.path().display().to_string()));
+        }
+    }
+    files.retain(|f| f.ends_with(".pack"));
+    assert!(!files.is_empty());
+    for f in &files {
+        let out = packwright(&["check", f]);
+        assert_eq!(out.status.code(), Some(0), "{f}:\n{}", text(&out.stderr));
+    }
+}
