@@ -296,3 +296,18 @@ fn shared_examples_compile_when_present() {
         assert_eq!(out.status.code(), Some(0), "{f}:\n{}", text(&out.stderr));
     }
 }
+
+/// The README's language example is a valid file.
+#[test]
+fn the_readme_example_compiles() {
+    let readme = fs::read_to_string(root().join("README.md")).expect("README");
+    let start = readme.find("## The language by example").expect("section");
+    let block = &readme[start..];
+    let body = block.split("```text\n").nth(1).and_then(|b| b.split("```").next()).expect("code block");
+    let dir = scratch("readme");
+    let file = dir.join("readme.pack");
+    fs::write(&file, body).expect("write");
+    let out = packwright(&["check", &file.display().to_string()]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let _ = fs::remove_dir_all(&dir);
+}
