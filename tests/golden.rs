@@ -303,7 +303,11 @@ fn the_readme_example_compiles() {
     let readme = fs::read_to_string(root().join("README.md")).expect("README");
     let start = readme.find("## The language by example").expect("section");
     let block = &readme[start..];
-    let body = block.split("```text\n").nth(1).and_then(|b| b.split("```").next()).expect("code block");
+    let body = block
+        .split("```text\n")
+        .nth(1)
+        .and_then(|b| b.split("```").next())
+        .expect("code block");
     let dir = scratch("readme");
     let file = dir.join("readme.pack");
     fs::write(&file, body).expect("write");
