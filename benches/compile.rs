@@ -65,11 +65,19 @@ fn bench(c: &mut Criterion) {
     assert_eq!(compiled.expanded.demonstrations.len(), 5_000);
     assert_eq!(compiled.expanded.suites[0].cases.len(), 10_000);
     let bytes: usize = artifacts.iter().map(|a| a.bytes.len()).sum();
-    eprintln!("artifacts: {} samples, {:.1} MB", compiled.graphs.s, bytes as f64 / 1e6);
+    eprintln!(
+        "artifacts: {} samples, {:.1} MB",
+        compiled.graphs.s,
+        bytes as f64 / 1e6
+    );
     let mut group = c.benchmark_group("compile");
     group.sample_size(10);
     group.bench_function("5k demos + 10k scenarios", |b| {
-        b.iter(|| compile(&loader, black_box(&roots)).map(|(_, a)| a.len()).unwrap_or(0))
+        b.iter(|| {
+            compile(&loader, black_box(&roots))
+                .map(|(_, a)| a.len())
+                .unwrap_or(0)
+        })
     });
     group.finish();
 }
