@@ -37,6 +37,8 @@ pub enum SyntaxError {
     },
     #[error("`{found}` is not a number")]
     BadNumber { span: Span, found: String },
+    #[error("this `{{` is never closed")]
+    Unclosed { span: Span },
 }
 
 /// A bare length longer than this is taken for a forgotten unit.
@@ -50,7 +52,8 @@ impl SyntaxError {
             | SyntaxError::MissingUnit { span, .. }
             | SyntaxError::UnexpectedUnit { span, .. }
             | SyntaxError::NotWholeNumber { span, .. }
-            | SyntaxError::BadNumber { span, .. } => *span,
+            | SyntaxError::BadNumber { span, .. }
+            | SyntaxError::Unclosed { span } => *span,
         }
     }
 
@@ -63,6 +66,7 @@ impl SyntaxError {
             SyntaxError::UnexpectedUnit { .. } => "E004",
             SyntaxError::NotWholeNumber { .. } => "E005",
             SyntaxError::BadNumber { .. } => "E006",
+            SyntaxError::Unclosed { .. } => "E007",
         }
     }
 
@@ -75,6 +79,7 @@ impl SyntaxError {
             SyntaxError::UnexpectedUnit { .. } => "unit not allowed here".into(),
             SyntaxError::NotWholeNumber { .. } => "not a whole number".into(),
             SyntaxError::BadNumber { .. } => "not a number".into(),
+            SyntaxError::Unclosed { .. } => "opened here".into(),
         }
     }
 
@@ -97,6 +102,9 @@ impl SyntaxError {
             SyntaxError::UnexpectedUnit { .. } => Some("remove the unit".into()),
             SyntaxError::NotWholeNumber { .. } => Some("write a whole number such as `3`".into()),
             SyntaxError::BadNumber { .. } => Some("write a number such as `0.25` or `-12`".into()),
+            SyntaxError::Unclosed { .. } => {
+                Some("close the block with `}` after its last statement".into())
+            }
         }
     }
 }

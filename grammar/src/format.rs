@@ -48,7 +48,7 @@ fn scan_comments(src: &str) -> Vec<Comment> {
     let mut iter = src.char_indices();
     while let Some((i, c)) = iter.next() {
         match c {
-            '\n' => {
+            '\n' | '\r' => {
                 in_string = false;
                 line_start = i + 1;
             }
@@ -58,7 +58,7 @@ fn scan_comments(src: &str) -> Vec<Comment> {
             }
             '"' if !escaped => in_string = !in_string,
             '#' if !in_string => {
-                let end = src[i..].find('\n').map_or(src.len(), |e| i + e);
+                let end = src[i..].find(['\n', '\r']).map_or(src.len(), |e| i + e);
                 out.push(Comment {
                     start: i,
                     text: src[i..end].trim_end().to_owned(),

@@ -36,13 +36,15 @@ pub fn parse(src: &str) -> Result<File, Vec<SyntaxError>> {
 type P<'i> = Pair<'i, Rule>;
 
 /// The span of a pair without the blanks and comments that pest's implicit
-/// whitespace may have consumed after its last token.
+/// whitespace may have consumed after its last token: it ends where its
+/// last leaf token ends.
 fn span(p: &P) -> Span {
     let start = p.as_span().start();
     let end = p
         .clone()
         .into_inner()
         .flatten()
+        .filter(|k| k.clone().into_inner().next().is_none())
         .map(|k| k.as_span().end())
         .max()
         .unwrap_or(p.as_span().end());
@@ -211,6 +213,9 @@ impl Builder {
     fn file(&mut self, pair: P) -> File {
         let src = pair.as_str();
         let mut items = Vec::new();
+        // After a bad item that opens a block, the block's lines are bad
+        // items too: skip them, up to the line that closes it.
+        let mut skipping = false;
         for p in pair.into_inner() {
             let item = match p.as_rule() {
                 Rule::use_item => self.use_item(p),
@@ -223,14 +228,50 @@ impl Builder {
                 Rule::scenario => self.scenario(src, p),
                 Rule::scenarios => self.scenarios(src, p),
                 Rule::bad_item => {
-                    self.reparse(src, Rule::item_only, &p, "at the top level");
+                    let text = p.as_str();
+                    if skipping {
+                        skipping = !text.trim_start().starts_with('}');
+                    } else {
+                        self.bad_item(src, &p);
+                        skipping = text.matches('{').count() > text.matches('}').count();
+                    }
                     continue;
                 }
                 _ => continue,
             };
+            skipping = false;
             items.push(item);
         }
         File { items }
+    }
+
+    /// Reports a line that is not an item. A good block header whose block
+    /// is never closed is reported at its `{`.
+    fn bad_item(&mut self, src: &str, p: &P) {
+        let text = p.as_str();
+        let start = p.as_span().start();
+        let unclosed = text.matches('{').count() > text.matches('}').count();
+        match PackParser::parse(Rule::item_only, text) {
+            Err(e) => {
+                let at_end = match e.location {
+                    pest::error::InputLocation::Pos(pos) => {
+                        text[pos.min(text.len())..].trim().is_empty()
+                    }
+                    pest::error::InputLocation::Span((s, _)) => {
+                        text[s.min(text.len())..].trim().is_empty()
+                    }
+                };
+                match text.rfind('{') {
+                    Some(brace) if unclosed && at_end => self.errors.push(SyntaxError::Unclosed {
+                        span: Span::new(start + brace, start + brace + 1),
+                    }),
+                    _ => self
+                        .errors
+                        .push(from_pest(src, e, start, "at the top level")),
+                }
+            }
+            Ok(_) => self.reparse(src, Rule::item_only, p, "at the top level"),
+        }
     }
 
     /// Re-parses a recovered fragment with the rule expected there, to say
