@@ -1,0 +1,219 @@
+//! Reading arms from URDF: the built-in UR10, UR detection, fixed joints,
+//! limits, and the descriptions that are refused.
+
+use super::*;
+
+#[test]
+fn the_builtin_ur10_is_read_from_its_urdf() {
+    let arm = Arm::ur10();
+    assert_eq!(arm.name, "ur10");
+    let names: Vec<&str> = arm.links.iter().map(|l| l.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "base_link",
+            "shoulder_link",
+            "upper_arm_link",
+            "forearm_link",
+            "wrist_1_link",
+            "wrist_2_link",
+            "wrist_3_link"
+        ]
+    );
+    let g = arm.ur.expect("the UR10 is detected as a UR arm");
+    let expected = [D1, A2, A3, D4, D5, D6];
+    for (got, want) in [g.d1, g.a2, g.a3, g.d4, g.d5, g.d6].iter().zip(expected) {
+        assert!((got - want).abs() < 1e-12, "{g:?}");
+    }
+    assert_eq!(arm.flange, Isometry3::identity());
+    for (i, l) in arm.limits.iter().enumerate() {
+        let range = if i == 2 { PI } else { TAU };
+        assert_eq!((l.lower, l.upper), (-range, range), "joint {i}");
+        let speed = if i < 2 { 120.0 } else { 180.0 };
+        assert!(
+            (l.velocity - f64::to_radians(speed)).abs() < 1e-12,
+            "joint {i}"
+        );
+        let (acc, jerk) = if i < 3 { (2.5, 10.0) } else { (4.0, 20.0) };
+        assert_eq!((l.acceleration, l.jerk), (acc, jerk), "joint {i}");
+    }
+    // Every link but the flange has capsules; the upper arm tube runs along
+    // x from 0 to a2, 0.176 m along the shoulder axis.
+    assert!(arm.links.iter().all(|l| !l.shapes.is_empty()));
+    let Shape::Capsule { a, b, radius } = &arm.links[2].shapes[1] else {
+        panic!("a capsule")
+    };
+    let ends = [a.coords, b.coords];
+    assert!(
+        ends.iter()
+            .any(|e| (e - Vector3::new(A2, 0.0, 0.176)).norm() < 1e-12),
+        "{ends:?}"
+    );
+    assert!(
+        ends.iter()
+            .any(|e| (e - Vector3::new(0.0, 0.0, 0.176)).norm() < 1e-12),
+        "{ends:?}"
+    );
+    assert_eq!(*radius, 0.06);
+}
+
+#[test]
+fn ur_geometry_is_detected_whatever_the_collision_shapes() {
+    let boxes = edited(
+        r#"<geometry><cylinder radius="0.06" length="0.612"/></geometry>"#,
+        r#"<geometry><box size="0.612 0.12 0.12"/></geometry>"#,
+    )
+    .replace(
+        r#"<cylinder radius="0.047" length="0.17"/>"#,
+        r#"<sphere radius="0.06"/>"#,
+    )
+    .replace(
+        r#"<cylinder radius="0.045" length="0.08"/>"#,
+        r#"<mesh filename="wrist3.stl"/>"#,
+    );
+    let arm = from_urdf(&boxes).unwrap();
+    assert_eq!(arm.ur, Arm::ur10().ur);
+    assert!(matches!(arm.links[2].shapes[1], Shape::Cuboid { .. }));
+    assert!(matches!(arm.links[4].shapes[0], Shape::Capsule { a, b, .. } if a == b));
+    // Meshes are ignored: a mesh-only link has no shapes.
+    assert!(arm.links[6].shapes.is_empty());
+
+    // Angles rounded within the 1e-6 tolerance still count: the closed form
+    // then lands within ~3e-8 and a few damped least squares steps polish it.
+    let arm = from_urdf(&UR10_URDF.replace("1.5707963267948966", "1.5707963")).unwrap();
+    assert!(arm.ur.is_some());
+    let mut rng = ChaCha8Rng::seed_from_u64(13);
+    for _ in 0..100 {
+        let q = tool_down_joints(&arm, &mut rng);
+        let target = arm.flange_pose(&base(), &q);
+        let sol = arm.pose_ik(&base(), &target, &q).expect("reachable");
+        let got = arm.flange_pose(&base(), &sol);
+        assert!((got.translation.vector - target.translation.vector).norm() < 1e-9);
+        assert!(got.rotation.angle_to(&target.rotation) < 1e-9);
+    }
+
+    // Rounded angles beyond the 1e-6 tolerance are not the UR geometry.
+    let rounded = UR10_URDF.replace("1.5707963267948966", "1.5708");
+    let arm = from_urdf(&rounded).unwrap();
+    assert!(arm.ur.is_none());
+}
+
+#[test]
+fn fixed_joints_fold_into_origins_and_flange() {
+    // A fixed mount before the base joint and a tool flange past tool0.
+    let text = edited(
+        r#"<link name="tool0"/>"#,
+        r#"<link name="tool0"/><link name="mount"/><link name="cup"/>"#,
+    )
+    .replace(r#"<parent link="base_link"/>"#, r#"<parent link="mount"/>"#)
+    .replace(
+        r#"<joint name="flange_joint""#,
+        r#"<joint name="m" type="fixed"><parent link="base_link"/><child link="mount"/><origin xyz="0 0 0.1" rpy="0 0 0.5"/></joint>
+           <joint name="c" type="fixed"><parent link="tool0"/><child link="cup"/><origin xyz="0 0 0.2"/></joint>
+           <joint name="flange_joint""#,
+    );
+    let arm = from_urdf(&text).unwrap();
+    assert!(arm.ur.is_none(), "the mount turns the base joint's origin");
+    assert_eq!(
+        arm.flange,
+        Isometry3::identity(),
+        "tool0 is the flange, not the cup"
+    );
+    let ur10 = Arm::ur10();
+    let mount = Isometry3::from_parts(
+        Translation3::new(0.0, 0.0, 0.1),
+        UnitQuaternion::from_euler_angles(0.0, 0.0, 0.5),
+    );
+    let q = [0.3, -1.0, 1.2, 0.1, 0.4, -0.6];
+    let want = mount * ur10.flange_pose(&Isometry3::identity(), &q);
+    let got = arm.flange_pose(&Isometry3::identity(), &q);
+    assert!((want.translation.vector - got.translation.vector).norm() < 1e-12);
+}
+
+#[test]
+fn limits_follow_the_urdf_version_and_joint_type() {
+    // Before URDF 1.2, acceleration and jerk are ignored: the defaults apply.
+    let old = from_urdf(&edited(r#"version="1.2""#, "")).unwrap();
+    assert!(
+        old.limits
+            .iter()
+            .all(|l| (l.acceleration, l.jerk) == (2.5, 10.0))
+    );
+    // Continuous joints get ±2π.
+    let text = edited(
+        r#"<joint name="elbow_joint" type="revolute">"#,
+        r#"<joint name="elbow_joint" type="continuous">"#,
+    );
+    let arm = from_urdf(&text).unwrap();
+    assert_eq!((arm.limits[2].lower, arm.limits[2].upper), (-TAU, TAU));
+
+    // Narrow wrist-3 limits: yaw-free IK still puts joint 6 as near as allowed.
+    let narrow = UR10_URDF.replace(
+        r#"<limit lower="-6.283185307179586" upper="6.283185307179586" effort="56"
+           velocity="3.141592653589793" acceleration="4" jerk="20"/>
+  </joint>
+
+  <joint name="flange_joint""#,
+        r#"<limit lower="-0.5" upper="0.5" effort="56" velocity="3.141592653589793"/>
+  </joint>
+
+  <joint name="flange_joint""#,
+    );
+    let arm = from_urdf(&narrow).unwrap();
+    assert_eq!((arm.limits[5].lower, arm.limits[5].upper), (-0.5, 0.5));
+    let near = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 2.0];
+    let tip = Point3::new(0.7, 0.2, 0.1);
+    let q = arm
+        .yaw_free_tool_down_ik(&base(), tip, SUCTION, &near)
+        .unwrap();
+    assert_eq!(q[5], 0.5);
+}
+
+fn rejected(text: &str) -> String {
+    match from_urdf(text) {
+        Ok(_) => panic!("accepted"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn unusable_descriptions_are_rejected_with_reasons() {
+    let five = edited(
+        r#"<joint name="wrist_3_joint" type="revolute">"#,
+        r#"<joint name="wrist_3_joint" type="fixed">"#,
+    );
+    let msg = rejected(&five);
+    assert!(
+        msg.contains("5 movable joints") && msg.contains("exactly 6"),
+        "{msg}"
+    );
+
+    let branch = edited(
+        r#"<link name="tool0"/>"#,
+        r#"<link name="tool0"/><link name="camera"/>
+           <joint name="camera_joint" type="fixed"><parent link="forearm_link"/><child link="camera"/></joint>"#,
+    );
+    let msg = rejected(&branch);
+    assert!(msg.contains("branches at link `forearm_link`"), "{msg}");
+
+    let prismatic = edited(
+        r#"<joint name="elbow_joint" type="revolute">"#,
+        r#"<joint name="elbow_joint" type="prismatic">"#,
+    );
+    let msg = rejected(&prismatic);
+    assert!(msg.contains("`elbow_joint` is prismatic"), "{msg}");
+
+    let unlimited = edited(
+        r#"lower="-3.141592653589793" upper="3.141592653589793""#,
+        "",
+    );
+    let msg = rejected(&unlimited);
+    assert!(msg.contains("`elbow_joint` needs a <limit>"), "{msg}");
+
+    let two_roots = edited(
+        r#"<link name="tool0"/>"#,
+        r#"<link name="tool0"/><link name="stray"/>"#,
+    );
+    assert!(rejected(&two_roots).contains("several root links"));
+    assert!(rejected("<robot name='x'>").contains("invalid URDF"));
+}
