@@ -41,6 +41,16 @@ pub enum Command {
     Compile(CompileArgs),
     /// Summarise a directory of compiled artifacts.
     Show(ShowArgs),
+    /// Pack an order in the physical simulator and report each product.
+    ///
+    /// The order (or a scenario: products a worker already packed, missing
+    /// stock, jittered positions) is packed by the scripted expert or by
+    /// RRT-Connect, with jerk-limited (Ruckig) motion at the UR10's 2 ms
+    /// control cycle. Prints one row per product: planning time, simulated
+    /// execution time, final distance from the slot goal, outcome. Exit 0
+    /// when the package is complete, 1 when it is not (the arm stopped
+    /// safely, or products wait for restocking), 2 on bad input.
+    Execute(ExecuteArgs),
     /// Lay out .pack files canonically (comments are kept).
     ///
     /// Rewrites each file in place, atomically, unless `--check` or
@@ -78,6 +88,38 @@ pub struct ShowArgs {
     #[arg(value_name = "DIR")]
     pub dir: PathBuf,
     /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PlannerArg {
+    /// The scripted demonstrator: straight joint motions between the
+    /// sub-goals' inverse-kinematics solutions.
+    Expert,
+    /// The same sub-goals joined by RRT-Connect (the baseline).
+    Rrt,
+}
+
+#[derive(Debug, Args)]
+pub struct ExecuteArgs {
+    /// The .pack files that define the order (files they `use` are read too).
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+    /// The order to pack, with every product at its inventory position.
+    #[arg(long, value_name = "NAME", required_unless_present = "scenario")]
+    pub order: Option<String>,
+    /// A scenario instead: a `scenario` name, or a case of a `scenarios`
+    /// suite such as `case1_3of5/007`.
+    #[arg(long, value_name = "NAME")]
+    pub scenario: Option<String>,
+    /// Who plans the motion.
+    #[arg(long, value_enum, default_value = "expert")]
+    pub planner: PlannerArg,
+    /// Seed of the RRT-Connect planner.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
 }

@@ -22,6 +22,7 @@ macro_rules! errln {
     ($($t:tt)*) => {{ use std::io::Write as _; let _ = writeln!(std::io::stderr().lock(), $($t)*); }};
 }
 
+pub mod bridge;
 pub mod cli;
 pub mod commands;
 pub mod fsio;
@@ -51,6 +52,7 @@ pub fn run(cli: cli::Cli) -> anyhow::Result<Exit> {
         cli::Command::Check(args) => commands::check::run(&args),
         cli::Command::Compile(args) => commands::compile::run(&args),
         cli::Command::Show(args) => commands::show::run(&args),
+        cli::Command::Execute(args) => commands::execute::run(&args),
         cli::Command::Fmt(args) => commands::fmt::run(&args),
     }
 }

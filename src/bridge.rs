@@ -1,0 +1,148 @@
+//! From the compiler's model to the runtime's terms: a cell scene, the
+//! inventory's product specs, an order's assignment and the products'
+//! start placements. (The runtime does not depend on the compiler.)
+
+use anyhow::{Context, bail};
+use packwright_compiler::Compiled;
+use packwright_compiler::expand::Setup;
+use packwright_compiler::model::{Model, RobotModel};
+use packwright_runtime::execute::OrderTask;
+use packwright_runtime::robot::{Arm, from_urdf};
+use packwright_runtime::scene::{
+    BoxSpec, CellScene, DEFAULT_MASS, Placement, ProductSpec, SlotSpec,
+};
+
+/// What `execute` needs: the arm, the task and where products start.
+pub struct Episode {
+    pub arm: Arm,
+    pub task: OrderTask,
+    pub placements: Vec<Placement>,
+}
+
+pub fn cell_scene(m: &Model, cell: usize) -> CellScene {
+    let c = &m.cells[cell];
+    CellScene {
+        base: c.base,
+        suction: c.suction,
+        lift: c.lift,
+        pending: (c.pending.min, c.pending.max),
+        boxes: c
+            .boxes
+            .iter()
+            .map(|b| BoxSpec {
+                name: b.name.clone(),
+                centre: b.centre,
+                size: b.size,
+            })
+            .collect(),
+        slots: c
+            .slots
+            .iter()
+            .map(|s| SlotSpec {
+                name: s.name.clone(),
+                position: s.at,
+                box_index: s.box_index,
+            })
+            .collect(),
+    }
+}
+
+pub fn arm(m: &Model, cell: usize) -> anyhow::Result<Arm> {
+    match &m.cells[cell].robot {
+        RobotModel::Ur10 => Ok(Arm::ur10()),
+        RobotModel::Urdf(path) => {
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("cannot read {path}"))?;
+            from_urdf(&text).with_context(|| format!("robot description {path}"))
+        }
+    }
+}
+
+/// The episode of a setup (an order's, or a scenario case's).
+pub fn episode(m: &Model, setup: &Setup) -> anyhow::Result<Episode> {
+    let inv = &m.inventories[setup.inventory];
+    let products: Vec<ProductSpec> = inv
+        .entries
+        .iter()
+        .map(|e| {
+            let p = &m.products[e.product];
+            ProductSpec {
+                name: p.name.clone(),
+                size: p.size,
+                mass: p.mass.unwrap_or(DEFAULT_MASS),
+            }
+        })
+        .collect();
+    let task = OrderTask {
+        cell: cell_scene(m, inv.cell),
+        products,
+        assignment: setup.assignment.clone(),
+    };
+    let placements = (0..inv.entries.len())
+        .filter(|e| !setup.missing.contains(e))
+        .map(|e| {
+            let spec = task.products[e].clone();
+            let centre = match setup.slot_of(e) {
+                Some(s) if setup.human_packed.contains(&e) => task.goal(e, s),
+                _ => [
+                    setup.positions[e][0],
+                    setup.positions[e][1],
+                    spec.size[2] / 2.0,
+                ],
+            };
+            Placement {
+                product: spec,
+                centre,
+            }
+        })
+        .collect();
+    Ok(Episode {
+        arm: arm(m, inv.cell)?,
+        task,
+        placements,
+    })
+}
+
+/// The setup named by `--order` or `--scenario`.
+pub fn find_setup(
+    c: &Compiled,
+    order: Option<&str>,
+    scenario: Option<&str>,
+) -> anyhow::Result<(String, Setup)> {
+    let m = &c.model;
+    if let Some(name) = scenario {
+        for suite in &c.expanded.suites {
+            if let Some(case) = suite.cases.iter().find(|k| k.name == name) {
+                return Ok((case.name.clone(), case.setup.clone()));
+            }
+        }
+        let known: Vec<&str> = c
+            .expanded
+            .suites
+            .iter()
+            .flat_map(|s| s.cases.first().map(|k| k.name.as_str()))
+            .collect();
+        bail!(
+            "no scenario `{name}`; scenarios are named like: {}",
+            known.join(", ")
+        );
+    }
+    let Some(name) = order else {
+        bail!("give --order NAME or --scenario NAME");
+    };
+    let Some(o) = m.orders.iter().find(|o| o.name == name) else {
+        let known: Vec<&str> = m.orders.iter().map(|o| o.name.as_str()).collect();
+        bail!("no order `{name}`; known orders: {}", known.join(", "));
+    };
+    let inv = &m.inventories[o.inventory];
+    Ok((
+        o.name.clone(),
+        Setup {
+            inventory: o.inventory,
+            assignment: o.assignment.iter().map(|a| (a.entry, a.slot)).collect(),
+            human_packed: Vec::new(),
+            missing: Vec::new(),
+            positions: inv.entries.iter().map(|e| e.at).collect(),
+        },
+    ))
+}
