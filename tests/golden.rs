@@ -315,3 +315,58 @@ fn the_readme_example_compiles() {
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
     let _ = fs::remove_dir_all(&dir);
 }
+
+/// The per-product execution plan of every example order, with the expert
+/// and with RRT-Connect, in the simulator (planning times are wall-clock
+/// and left out; distances rounded to 0.1 mm, times to 10 ms).
+#[test]
+fn execution_plans_of_the_example_orders() {
+    let mut text = String::new();
+    for file in pack_files("orders/customers") {
+        let src = fs::read_to_string(root().join(&file)).expect("order file");
+        let orders: Vec<&str> = src
+            .lines()
+            .filter_map(|l| l.strip_prefix("order "))
+            .filter_map(|l| l.split_whitespace().next())
+            .collect();
+        for order in orders {
+            for planner in ["expert", "rrt"] {
+                let out = packwright(&[
+                    "execute",
+                    &file,
+                    "--order",
+                    order,
+                    "--planner",
+                    planner,
+                    "--json",
+                ]);
+                assert_eq!(
+                    out.status.code(),
+                    Some(0),
+                    "{file} {order} {planner}:\n{}",
+                    text_of(&out)
+                );
+                let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+                text.push_str(&format!(
+                    "{order} ({planner}): complete {}\n",
+                    report["complete"]
+                ));
+                for p in report["products"].as_array().expect("products") {
+                    text.push_str(&format!(
+                        "  {} -> {}: {}, execution {:.2} s, error {:.1} mm\n",
+                        p["product"].as_str().unwrap_or("?"),
+                        p["slot"].as_str().unwrap_or("?"),
+                        p["outcome"].as_str().unwrap_or("?"),
+                        p["execution_s"].as_f64().unwrap_or(f64::NAN),
+                        p["error_m"].as_f64().unwrap_or(f64::NAN) * 1000.0,
+                    ));
+                }
+            }
+        }
+    }
+    insta::assert_snapshot!("execution_plans", text);
+}
+
+fn text_of(out: &Output) -> String {
+    format!("{}{}", text(&out.stdout), text(&out.stderr))
+}

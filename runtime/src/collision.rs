@@ -177,16 +177,18 @@ impl Checker {
                 });
             }
         }
-        // The cup: from the flange down its z axis, stopping short of the tip
-        // so that touching a product's top is not a collision.
-        let tip = (cell.suction - 0.005).max(0.0);
+        // The cup: from the flange down its z axis; the capsule's rounded end
+        // stops 5 mm short of the tip, so that touching a product's top is
+        // not a collision (nor the table beside a thin product).
+        let cup_radius = CUP_RADIUS + PADDING;
+        let tip = (cell.suction - 0.005 - cup_radius).max(0.0);
         parts.push(Part {
             link: CUP,
             local: arm.flange,
             geom: Geom::Capsule(Capsule::new(
                 Vector::ZERO,
                 Vector::new(0.0, 0.0, tip as f32),
-                (CUP_RADIUS + PADDING) as f32,
+                cup_radius as f32,
             )),
         });
         let mut names: Vec<String> = arm.links.iter().map(|l| l.name.clone()).collect();

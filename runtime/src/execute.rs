@@ -28,6 +28,9 @@ use std::time::Instant;
 
 /// A product is packed when its centre is this close to its slot goal.
 pub const SUCCESS_RADIUS: f64 = 0.02;
+/// How much a release point is raised at a time when the wrist cannot
+/// reach it.
+const RAISE_STEP: f64 = 0.01;
 /// Cycles to wait after switching the suction (0.1 s).
 const SUCTION_SETTLE: usize = 50;
 /// Cycles to let a released product settle (0.5 s).
@@ -165,27 +168,46 @@ impl<W: World> Runner<'_, W> {
         let mut out = Vec::new();
         let mut current = from;
         for (k, g) in goals.iter().enumerate() {
-            let tip = Point3::new(g.tip[0], g.tip[1], g.tip[2]);
-            let target = reach(
-                self.arm,
-                &self.checker,
-                &self.base,
-                tip,
-                yaw,
-                self.task.cell.suction,
-                &current,
-                held,
-                ignore,
-            )
-            .ok_or_else(|| {
-                format!(
-                    "sub-goal {} at ({:.3}, {:.3}, {:.3}) is unreachable",
-                    k + 1,
-                    g.tip[0],
-                    g.tip[1],
-                    g.tip[2]
+            let solve = |z: f64| {
+                let tip = Point3::new(g.tip[0], g.tip[1], z);
+                reach(
+                    self.arm,
+                    &self.checker,
+                    &self.base,
+                    tip,
+                    yaw,
+                    self.task.cell.suction,
+                    &current,
+                    held,
+                    ignore,
                 )
-            })?;
+            };
+            // A release point the wrist cannot reach (a deep box, a wall
+            // near the slot) is raised until it can: the product drops the
+            // rest of the way.
+            let release_ceiling = goals
+                .get(k.wrapping_sub(1))
+                .map_or(g.tip[2], |prev| prev.tip[2]);
+            let target = solve(g.tip[2])
+                .or_else(|| {
+                    (g.suction == Suction::Off)
+                        .then(|| {
+                            (1..)
+                                .map(|i| g.tip[2] + RAISE_STEP * i as f64)
+                                .take_while(|z| *z <= release_ceiling)
+                                .find_map(solve)
+                        })
+                        .flatten()
+                })
+                .ok_or_else(|| {
+                    format!(
+                        "sub-goal {} at ({:.3}, {:.3}, {:.3}) is unreachable",
+                        k + 1,
+                        g.tip[0],
+                        g.tip[1],
+                        g.tip[2]
+                    )
+                })?;
             let path = match self.planner {
                 PlannerKind::Expert => vec![current, target],
                 PlannerKind::Rrt { seed } => {
@@ -217,7 +239,7 @@ impl<W: World> Runner<'_, W> {
         held: Option<&Held>,
         ignore: Option<&str>,
     ) -> Result<(), Failure> {
-        for (path, suction) in plan {
+        for (k, (path, suction)) in plan.into_iter().enumerate() {
             let start = self.world.observe().joints;
             let samples =
                 smooth_path(self.arm.limits, start, &path[1..]).map_err(|e| e.to_string())?;
@@ -234,8 +256,10 @@ impl<W: World> Runner<'_, W> {
                     if let Some(hit) = self.checker.check_motion(&last, q, held, ignore) {
                         self.planning_s += started.elapsed().as_secs_f64();
                         return Err(format!(
-                            "the planned motion would collide: {} with {}",
-                            hit.a, hit.b
+                            "the motion to sub-goal {} would collide: {} with {}",
+                            k + 1,
+                            hit.a,
+                            hit.b
                         ));
                     }
                     last = *q;
@@ -290,7 +314,13 @@ impl<W: World> Runner<'_, W> {
         };
         let lifted = picking[2].tip;
         let slot = cell.slots[s].position;
-        let placing = expert::placing(lifted, slot, h, expert::box_height(cell, s));
+        let placing = expert::placing(
+            lifted,
+            slot,
+            h,
+            expert::box_height(cell, s),
+            [cell.base[0], cell.base[1]],
+        );
         self.sync_products(&obs);
         // Placing the product square in its slot: yaw 0 (it turns with the cup).
         let plan = self.plan_stage(obs.joints, &placing, 0.0, Some(&held), None)?;

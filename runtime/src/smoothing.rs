@@ -21,11 +21,12 @@
 //!   acceleration). A target outside `[lower, upper]` (beyond
 //!   [`POSITION_TOLERANCE`], the tolerance of [`Arm::within_limits`]) or not
 //!   finite is an error: it is never clamped.
-//! - **Synchronisation**: time-synchronised (Ruckig's default): every joint
-//!   starts and arrives together; the move lasts as long as the slowest
-//!   joint's time-optimal move, and the other joints are slowed to match.
-//!   This is not a straight line in joint space (that would be Ruckig's
-//!   phase synchronisation).
+//! - **Synchronisation**: phase-synchronised: every joint follows the same
+//!   normalised profile, so a rest-to-rest move is a straight line in joint
+//!   space, the very segment the collision checker verified (with time
+//!   synchronisation the joints arrive together but the path bends away
+//!   from the checked line, and near a box wall that matters). The move
+//!   lasts as long as the slowest joint's time-optimal move.
 //! - **The cycle**: each [`Smoother::step`] advances the trajectory by
 //!   exactly [`CONTROL_PERIOD`] and returns the state there: the command for
 //!   the next cycle.
@@ -121,7 +122,7 @@ impl Smoother {
         check_position(&limits, &start, "start")?;
 
         let mut input = InputParameter::<DOF>::new(None);
-        input.synchronization = Synchronization::Time;
+        input.synchronization = Synchronization::Phase;
         input.control_interface = ControlInterface::Position;
         input.duration_discretization = DurationDiscretization::Continuous;
         let mut max_position = [0.0; DOF];
@@ -308,7 +309,7 @@ pub fn smooth_path(
 }
 
 /// The duration (seconds) of the motion [`smooth_path`] commands: the sum of
-/// the time-optimal (time-synchronised) durations of its rest-to-rest
+/// the time-optimal (phase-synchronised) durations of its rest-to-rest
 /// segments, each computed offline by Ruckig.
 ///
 /// This is continuous time: [`smooth_path`] returns

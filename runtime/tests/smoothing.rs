@@ -215,6 +215,22 @@ fn joints_are_time_synchronised() {
     assert!(before_last.position[0] != 3.0 && before_last.position[5] != 0.1);
 }
 
+/// Phase synchronisation: a rest-to-rest move is the straight joint-space
+/// segment that the collision checker verified, not a curve near it.
+#[test]
+fn moves_are_straight_lines_in_joint_space() {
+    let start = [0.3, -1.2, 1.0, -0.5, -1.57, 0.2];
+    let target = [-1.1, -0.4, 2.0, -1.9, -1.2, 2.9];
+    let steps = drive(ur10(), start, &[target]);
+    for s in &steps {
+        let f0 = (s.position[0] - start[0]) / (target[0] - start[0]);
+        for j in 1..DOF {
+            let f = (s.position[j] - start[j]) / (target[j] - start[j]);
+            assert!((f - f0).abs() < 1e-6, "joint {j} at {f}, joint 0 at {f0}");
+        }
+    }
+}
+
 #[test]
 fn targets_at_the_position_limits_are_reachable() {
     let limits = ur10();
