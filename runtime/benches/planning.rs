@@ -9,6 +9,7 @@ use packwright_runtime::execute::reach;
 use packwright_runtime::robot::Arm;
 use packwright_runtime::rrt::{self, Query, RrtConfig};
 use packwright_runtime::scene::{BoxSpec, CellScene, SlotSpec};
+use std::f64::consts::FRAC_PI_2;
 use std::hint::black_box;
 
 fn cell() -> CellScene {
@@ -51,7 +52,7 @@ fn bench(c: &mut Criterion) {
     })
     .collect();
     checker.set_products(&cubes);
-    let ready = [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0];
+    let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
     let at = |x: f64, y: f64, z: f64| {
         reach(
             &arm,
