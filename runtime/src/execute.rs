@@ -168,9 +168,10 @@ impl<W: World> Runner<'_, W> {
         let mut out = Vec::new();
         let mut current = from;
         for (k, g) in goals.iter().enumerate() {
+            let expert = self.planner == PlannerKind::Expert;
             let solve = |z: f64| {
                 let tip = Point3::new(g.tip[0], g.tip[1], z);
-                reach(
+                let q = reach(
                     self.arm,
                     &self.checker,
                     &self.base,
@@ -180,7 +181,14 @@ impl<W: World> Runner<'_, W> {
                     &current,
                     held,
                     ignore,
-                )
+                )?;
+                // A release the expert's straight motion cannot reach is no
+                // release for it (RRT-Connect may go around).
+                let blocked = g.suction == Suction::Off
+                    && expert
+                    && checked_samples(self.arm, &self.checker, current, &[q], held, ignore)
+                        .is_err();
+                (!blocked).then_some(q)
             };
             // A release point the wrist cannot reach (a deep box, a wall
             // near the slot) is raised until it can: the product drops the
@@ -241,31 +249,11 @@ impl<W: World> Runner<'_, W> {
     ) -> Result<(), Failure> {
         for (k, (path, suction)) in plan.into_iter().enumerate() {
             let start = self.world.observe().joints;
-            let samples =
-                smooth_path(self.arm.limits, start, &path[1..]).map_err(|e| e.to_string())?;
-            // Check the smoothed motion itself, at most 1 degree apart.
             let started = Instant::now();
-            let mut last = start;
-            for q in &samples {
-                let span = q
-                    .iter()
-                    .zip(&last)
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, f64::max);
-                if span >= MAX_STEP || q == samples.last().unwrap_or(q) {
-                    if let Some(hit) = self.checker.check_motion(&last, q, held, ignore) {
-                        self.planning_s += started.elapsed().as_secs_f64();
-                        return Err(format!(
-                            "the motion to sub-goal {} would collide: {} with {}",
-                            k + 1,
-                            hit.a,
-                            hit.b
-                        ));
-                    }
-                    last = *q;
-                }
-            }
+            let samples = checked_samples(self.arm, &self.checker, start, &path[1..], held, ignore);
             self.planning_s += started.elapsed().as_secs_f64();
+            let samples =
+                samples.map_err(|why| format!("the motion to sub-goal {}: {why}", k + 1))?;
             for q in &samples {
                 self.world.command(q).map_err(|e| e.to_string())?;
                 self.world.step().map_err(|e| e.to_string())?;
@@ -334,6 +322,36 @@ impl<W: World> Runner<'_, W> {
         let plan = self.plan_stage(obs.joints, &up, 0.0, None, Some(&name))?;
         self.run_stage(plan, None, Some(&name))
     }
+}
+
+/// The smoothed 2 ms commands from `start` through `waypoints`, each
+/// checked for collision (the straight joint segment from the last checked
+/// sample, at most 1 degree on): the very commands that will be sent, or
+/// why they would collide.
+pub fn checked_samples(
+    arm: &Arm,
+    checker: &Checker,
+    start: Joints,
+    waypoints: &[Joints],
+    held: Option<&Held>,
+    ignore: Option<&str>,
+) -> Result<Vec<Joints>, String> {
+    let samples = smooth_path(arm.limits, start, waypoints).map_err(|e| e.to_string())?;
+    let mut last = start;
+    for (i, q) in samples.iter().enumerate() {
+        let span = q
+            .iter()
+            .zip(&last)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        if span >= MAX_STEP || i + 1 == samples.len() {
+            if let Some(hit) = checker.check_motion(&last, q, held, ignore) {
+                return Err(format!("would collide: {} with {}", hit.a, hit.b));
+            }
+            last = *q;
+        }
+    }
+    Ok(samples)
 }
 
 /// Joints that put the cup tip at `tip` pointing down with `yaw`, free of
