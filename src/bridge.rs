@@ -4,6 +4,7 @@
 
 use anyhow::{Context, bail};
 use packwright_compiler::Compiled;
+use packwright_compiler::artifact::{DemonstrationRecord, RobotRecord, WorldFile};
 use packwright_compiler::expand::Setup;
 use packwright_compiler::model::{Model, RobotModel};
 use packwright_runtime::execute::OrderTask;
@@ -145,4 +146,109 @@ pub fn find_setup(
             positions: inv.entries.iter().map(|e| e.at).collect(),
         },
     ))
+}
+
+/// The episode of a compiled demonstration (from the artifacts): the
+/// assignment in the demonstrated sequence, then the products a worker had
+/// packed.
+pub fn demonstration_episode(
+    world: &WorldFile,
+    demo: &DemonstrationRecord,
+) -> anyhow::Result<Episode> {
+    let Some(cell) = world.cells.iter().find(|c| c.name == demo.cell) else {
+        bail!("orders.json has no cell `{}`", demo.cell);
+    };
+    let Some(inv) = world.inventories.iter().find(|i| i.name == demo.inventory) else {
+        bail!("orders.json has no inventory `{}`", demo.inventory);
+    };
+    let scene = CellScene {
+        base: cell.base,
+        suction: cell.suction,
+        lift: cell.lift,
+        pending: (cell.pending.min, cell.pending.max),
+        boxes: cell
+            .boxes
+            .iter()
+            .map(|b| BoxSpec {
+                name: b.name.clone(),
+                centre: b.centre,
+                size: b.size,
+            })
+            .collect(),
+        slots: cell
+            .slots
+            .iter()
+            .map(|s| SlotSpec {
+                name: s.name.clone(),
+                position: s.position,
+                box_index: cell
+                    .boxes
+                    .iter()
+                    .position(|b| b.name == s.box_name)
+                    .unwrap_or(0),
+            })
+            .collect(),
+    };
+    let products = inv
+        .products
+        .iter()
+        .map(|at| {
+            let p = world
+                .products
+                .iter()
+                .find(|p| p.name == at.product)
+                .with_context(|| format!("orders.json has no product `{}`", at.product))?;
+            Ok(ProductSpec {
+                name: p.name.clone(),
+                size: p.size,
+                mass: p.mass.unwrap_or(DEFAULT_MASS),
+            })
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let index = |name: &str| products.iter().position(|p| p.name == name);
+    let slot_of = |name: &str| {
+        demo.assignment
+            .iter()
+            .find(|a| a.product == name)
+            .and_then(|a| scene.slots.iter().position(|s| s.name == a.slot))
+    };
+    let mut assignment = Vec::new();
+    for name in demo.sequence.iter().chain(&demo.human_packed) {
+        match (index(name), slot_of(name)) {
+            (Some(p), Some(s)) => assignment.push((p, s)),
+            _ => bail!(
+                "demonstration of `{}` names an unknown product `{name}`",
+                demo.block
+            ),
+        }
+    }
+    let placements = demo
+        .start
+        .iter()
+        .map(|at| {
+            let p =
+                index(&at.product).with_context(|| format!("unknown product `{}`", at.product))?;
+            Ok(Placement {
+                product: products[p].clone(),
+                centre: at.at,
+            })
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let arm = match &cell.robot {
+        RobotRecord::Ur10 => Arm::ur10(),
+        RobotRecord::Urdf(path) => {
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("cannot read {path}"))?;
+            from_urdf(&text).with_context(|| format!("robot description {path}"))?
+        }
+    };
+    Ok(Episode {
+        arm,
+        task: OrderTask {
+            cell: scene,
+            products,
+            assignment,
+        },
+        placements,
+    })
 }

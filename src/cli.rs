@@ -51,6 +51,16 @@ pub enum Command {
     /// when the package is complete, 1 when it is not (the arm stopped
     /// safely, or products wait for restocking), 2 on bad input.
     Execute(ExecuteArgs),
+    /// Record the expert's motion demonstrations for compiled demos.
+    ///
+    /// Replays every demonstration of a compiled directory in the
+    /// simulator with the scripted expert, in its demonstrated sequence,
+    /// and writes, for every sub-goal, what the sub-goal planner observes
+    /// (feature, tool position, label) and the sub-goal reached, plus 20
+    /// (delta, joint action) samples along the way (tensor names in the
+    /// README). Exit 1 if some demonstration could not be replayed (the
+    /// others are written).
+    Demonstrate(DemonstrateArgs),
     /// Lay out .pack files canonically (comments are kept).
     ///
     /// Rewrites each file in place, atomically, unless `--check` or
@@ -120,6 +130,19 @@ pub struct ExecuteArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct DemonstrateArgs {
+    /// A directory written by `packwright compile`.
+    #[arg(value_name = "DIR")]
+    pub dir: PathBuf,
+    /// The safetensors file to write.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
 }

@@ -53,6 +53,7 @@ pub fn run(cli: cli::Cli) -> anyhow::Result<Exit> {
         cli::Command::Compile(args) => commands::compile::run(&args),
         cli::Command::Show(args) => commands::show::run(&args),
         cli::Command::Execute(args) => commands::execute::run(&args),
+        cli::Command::Demonstrate(args) => commands::demonstrate::run(&args),
         cli::Command::Fmt(args) => commands::fmt::run(&args),
     }
 }

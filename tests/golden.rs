@@ -370,3 +370,43 @@ fn execution_plans_of_the_example_orders() {
 fn text_of(out: &Output) -> String {
     format!("{}{}", text(&out.stdout), text(&out.stderr))
 }
+
+/// `demonstrate` replays compiled demonstrations with the expert and
+/// writes the motion tensors: 6 sub-goals per handled product, 20 action
+/// samples per sub-goal, every action within ±5 degrees.
+#[test]
+fn demonstrate_writes_motion_demonstrations() {
+    let dir = scratch("demonstrate");
+    let compiled = dir.join("pine").display().to_string();
+    let motion = dir.join("motion.safetensors").display().to_string();
+    assert_eq!(
+        packwright(&[
+            "compile",
+            "orders/customers/pine_gifts.pack",
+            "-o",
+            &compiled
+        ])
+        .status
+        .code(),
+        Some(0)
+    );
+    let out = packwright(&["demonstrate", &compiled, "-o", &motion, "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text_of(&out));
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    // pine_trio's demo handles 3 products, pine_duo's 2.
+    assert_eq!(summary["subgoals"], 30);
+    assert_eq!(summary["actions"], 600);
+    let bytes = fs::read(&motion).expect("motion file");
+    let st = safetensors::SafeTensors::deserialize(&bytes).expect("safetensors");
+    let shape = |n: &str| st.tensor(n).expect(n).shape().to_vec();
+    assert_eq!(shape("subgoal_feature"), [30, 3]);
+    assert_eq!(shape("subgoal_label"), [30]);
+    assert_eq!(shape("action_delta"), [600, 3]);
+    let joints = st.tensor("action_joints").expect("action_joints");
+    let limit = 5f32.to_radians() + 1e-6;
+    for c in joints.data().chunks_exact(4) {
+        let v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+        assert!(v.abs() <= limit, "action {v} beyond 5 degrees");
+    }
+    let _ = fs::remove_dir_all(&dir);
+}

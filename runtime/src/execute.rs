@@ -17,6 +17,7 @@
 
 use crate::collision::{Checker, Held, MAX_STEP, ProductBody};
 use crate::expert::{self, SubGoal, Suction};
+use crate::record::{self, ActionSample, MotionLog, SubGoalSample};
 use crate::robot::{Arm, Joints, joint_distance, tool_down_pose};
 use crate::rrt::{self, Query, RrtConfig};
 use crate::scene::{CellScene, ProductSpec};
@@ -135,6 +136,15 @@ struct Runner<'a, W: World> {
     checker: Checker,
     planning_s: f64,
     execution_steps: usize,
+    log: Option<&'a mut MotionLog>,
+}
+
+/// What a stage's sub-goals are recorded with.
+#[derive(Debug, Clone, Copy)]
+struct StageInfo {
+    stage: u8,
+    feature: [f64; 3],
+    label: u32,
 }
 
 impl<W: World> Runner<'_, W> {
@@ -241,11 +251,49 @@ impl<W: World> Runner<'_, W> {
     }
 
     /// Smooths, checks and sends one stage's motions; switches the suction.
+    /// Records one sub-goal and the actions along the way to it.
+    fn record(
+        &mut self,
+        info: StageInfo,
+        k: usize,
+        start: &Joints,
+        goal: &Joints,
+        samples: &[Joints],
+    ) {
+        let (arm, base, suction) = (self.arm, self.base, self.task.cell.suction);
+        let Some(log) = self.log.as_deref_mut() else {
+            return;
+        };
+        let tip = |q: &Joints| -> [f64; 3] { arm.tool_tip(&base, q, suction).coords.into() };
+        let target = tip(goal);
+        log.subgoals.push(SubGoalSample {
+            feature: info.feature,
+            tool: tip(start),
+            label: info.label,
+            stage: info.stage,
+            index: k as u8,
+            target,
+        });
+        let subgoal = log.subgoals.len() - 1;
+        let along: Vec<Joints> = std::iter::once(*start)
+            .chain(samples.iter().copied())
+            .collect();
+        for i in record::spread(along.len(), record::SAMPLES_PER_SUBGOAL) {
+            let here = tip(&along[i]);
+            log.actions.push(ActionSample {
+                subgoal,
+                delta: std::array::from_fn(|j| target[j] - here[j]),
+                action: record::action(&along[i], goal),
+            });
+        }
+    }
+
     fn run_stage(
         &mut self,
         plan: Vec<(Vec<Joints>, Suction)>,
         held: Option<&Held>,
         ignore: Option<&str>,
+        info: Option<StageInfo>,
     ) -> Result<(), Failure> {
         for (k, (path, suction)) in plan.into_iter().enumerate() {
             let start = self.world.observe().joints;
@@ -254,6 +302,9 @@ impl<W: World> Runner<'_, W> {
             self.planning_s += started.elapsed().as_secs_f64();
             let samples =
                 samples.map_err(|why| format!("the motion to sub-goal {}: {why}", k + 1))?;
+            if let (Some(info), Some(goal)) = (info, path.last()) {
+                self.record(info, k, &start, goal, &samples);
+            }
             for q in &samples {
                 self.world.command(q).map_err(|e| e.to_string())?;
                 self.world.step().map_err(|e| e.to_string())?;
@@ -293,7 +344,12 @@ impl<W: World> Runner<'_, W> {
         let cell = &self.task.cell;
         let picking = expert::picking(centre, h, cell.lift);
         let plan = self.plan_stage(obs.joints, &picking, yaw, None, Some(&name))?;
-        self.run_stage(plan, None, Some(&name))?;
+        let pick_info = StageInfo {
+            stage: 0,
+            feature: centre,
+            label: 0,
+        };
+        self.run_stage(plan, None, Some(&name), Some(pick_info))?;
         let obs = self.world.observe();
         let held = Held {
             name: name.clone(),
@@ -312,7 +368,19 @@ impl<W: World> Runner<'_, W> {
         self.sync_products(&obs);
         // Placing the product square in its slot: yaw 0 (it turns with the cup).
         let plan = self.plan_stage(obs.joints, &placing, 0.0, Some(&held), None)?;
-        self.run_stage(plan, Some(&held), None)?;
+        let box_top = cell
+            .slots
+            .get(s)
+            .and_then(|sl| cell.boxes.get(sl.box_index))
+            .map_or([slot[0], slot[1], 0.0], |b| {
+                [b.centre[0], b.centre[1], b.size[2]]
+            });
+        let place_info = StageInfo {
+            stage: 1,
+            feature: box_top,
+            label: s as u32 + 1,
+        };
+        self.run_stage(plan, Some(&held), None, Some(place_info))?;
         // Back up from the released product.
         let obs = self.world.observe();
         let up = [SubGoal {
@@ -320,7 +388,7 @@ impl<W: World> Runner<'_, W> {
             suction: Suction::Keep,
         }];
         let plan = self.plan_stage(obs.joints, &up, 0.0, None, Some(&name))?;
-        self.run_stage(plan, None, Some(&name))
+        self.run_stage(plan, None, Some(&name), None)
     }
 }
 
@@ -410,8 +478,21 @@ pub fn home(arm: &Arm, cell: &CellScene) -> Option<Joints> {
 }
 
 /// Packs `task` in `world` with `arm`. The world's arm starts wherever it
-/// is; products are found by name in the observations.
+/// is; products are found by name in the observations and handled in the
+/// order of `task.assignment`.
 pub fn run<W: World>(world: &mut W, arm: &Arm, task: &OrderTask, planner: PlannerKind) -> Report {
+    run_recorded(world, arm, task, planner, None)
+}
+
+/// [`run`], recording the sub-goals and actions into `log` (motion
+/// demonstrations).
+pub fn run_recorded<W: World>(
+    world: &mut W,
+    arm: &Arm,
+    task: &OrderTask,
+    planner: PlannerKind,
+    log: Option<&mut MotionLog>,
+) -> Report {
     let base = Isometry3::translation(task.cell.base[0], task.cell.base[1], task.cell.base[2]);
     let mut runner = Runner {
         checker: Checker::new(arm, &task.cell),
@@ -422,6 +503,7 @@ pub fn run<W: World>(world: &mut W, arm: &Arm, task: &OrderTask, planner: Planne
         base,
         planning_s: 0.0,
         execution_steps: 0,
+        log,
     };
     let period = runner.world.control_period();
     let mut products = Vec::new();

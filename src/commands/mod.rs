@@ -2,6 +2,7 @@
 
 pub mod check;
 pub mod compile;
+pub mod demonstrate;
 pub mod execute;
 pub mod fmt;
 pub mod show;

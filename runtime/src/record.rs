@@ -1,0 +1,77 @@
+//! Motion demonstrations recorded from the scripted expert, for training
+//! the sub-goal planner and the dynamics policy.
+//!
+//! For every sub-goal: what the sub-goal planner will observe (the feature
+//! the reasoner selects: the product's centre when picking, the box's top
+//! centre when placing; the tool tip; the label, 0 = pick or the slot's)
+//! and the sub-goal reached. Along the way to it, [`SAMPLES_PER_SUBGOAL`]
+//! (delta, action) pairs: delta = sub-goal − tool tip, action = the
+//! expert's next joint step of base, shoulder and elbow towards the
+//! sub-goal's joints, each clipped to ±[`MAX_ACTION`].
+
+/// (delta, action) samples recorded per sub-goal.
+pub const SAMPLES_PER_SUBGOAL: usize = 20;
+/// The largest joint step of an action, radians (5 degrees).
+pub const MAX_ACTION: f64 = 5.0 * std::f64::consts::PI / 180.0;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct SubGoalSample {
+    /// The selected feature: product centre (picking) or box top centre
+    /// (placing).
+    pub feature: [f64; 3],
+    /// The tool tip when the sub-goal is issued.
+    pub tool: [f64; 3],
+    /// 0 = pick, else the slot's label.
+    pub label: u32,
+    /// 0 picking, 1 placing.
+    pub stage: u8,
+    /// 0, 1, 2: which of the stage's sub-goals.
+    pub index: u8,
+    /// The tool tip the expert reached.
+    pub target: [f64; 3],
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct ActionSample {
+    /// Index into [`MotionLog::subgoals`].
+    pub subgoal: usize,
+    pub delta: [f64; 3],
+    /// Joint steps of base, shoulder, elbow (radians).
+    pub action: [f64; 3],
+}
+
+/// Everything recorded while the expert packs.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MotionLog {
+    pub subgoals: Vec<SubGoalSample>,
+    pub actions: Vec<ActionSample>,
+}
+
+/// Indices of `n` samples spread evenly over `len` (all of them if fewer).
+pub fn spread(len: usize, n: usize) -> Vec<usize> {
+    if len <= n {
+        return (0..len).collect();
+    }
+    (0..n).map(|i| i * (len - 1) / (n - 1).max(1)).collect()
+}
+
+/// The expert's action at `q` towards `goal`: the base, shoulder and elbow
+/// differences, each clipped to ±[`MAX_ACTION`].
+pub fn action(q: &[f64; 6], goal: &[f64; 6]) -> [f64; 3] {
+    std::array::from_fn(|j| (goal[j] - q[j]).clamp(-MAX_ACTION, MAX_ACTION))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spread_and_clip() {
+        assert_eq!(spread(5, 20), vec![0, 1, 2, 3, 4]);
+        let s = spread(1000, 20);
+        assert_eq!(s.len(), 20);
+        assert_eq!((s[0], s[19]), (0, 999));
+        let a = action(&[0.0; 6], &[1.0, -0.01, -1.0, 0.0, 0.0, 0.0]);
+        assert_eq!(a, [MAX_ACTION, -0.01, -MAX_ACTION]);
+    }
+}
