@@ -178,7 +178,6 @@ impl<W: World> Runner<'_, W> {
         let mut out = Vec::new();
         let mut current = from;
         for (k, g) in goals.iter().enumerate() {
-            let expert = self.planner == PlannerKind::Expert;
             let solve = |z: f64| {
                 let tip = Point3::new(g.tip[0], g.tip[1], z);
                 let q = reach(
@@ -192,10 +191,9 @@ impl<W: World> Runner<'_, W> {
                     held,
                     ignore,
                 )?;
-                // A release the expert's straight motion cannot reach is no
-                // release for it (RRT-Connect may go around).
+                // A release the straight descent cannot reach (checked as the
+                // commands will be) is no release.
                 let blocked = g.suction == Suction::Off
-                    && expert
                     && checked_samples(self.arm, &self.checker, current, &[q], held, ignore)
                         .is_err();
                 (!blocked).then_some(q)
