@@ -305,10 +305,16 @@ impl Checker {
         allowed: &[(usize, usize)],
     ) -> Vec<((usize, usize), (usize, usize))> {
         let mut out = Vec::new();
+        let boxes: Vec<Aabb> = self
+            .parts
+            .iter()
+            .zip(poses)
+            .map(|(part, p)| part.geom.shape().compute_aabb(p))
+            .collect();
         for (i, a) in self.parts.iter().enumerate() {
             for (j, b) in self.parts.iter().enumerate().skip(i + 1) {
                 let (la, lb) = (a.link.min(b.link), a.link.max(b.link));
-                if lb <= la + 1 || allowed.contains(&(la, lb)) {
+                if lb <= la + 1 || allowed.contains(&(la, lb)) || !boxes[i].intersects(&boxes[j]) {
                     continue;
                 }
                 if intersects(&poses[i], a.geom.shape(), &poses[j], b.geom.shape()) {
