@@ -909,6 +909,29 @@ impl Resolver<'_> {
         usize::try_from(c.value).unwrap_or(usize::MAX)
     }
 
+    /// What `demos` and `scenarios` share: the required `choose`, and the
+    /// `human packs` and `missing` ranges checked against its N.
+    fn generator(
+        &mut self,
+        inv: usize,
+        block: Loc,
+        item: String,
+        choose: Once<&ast::Choose>,
+        human: Once<&ast::Range>,
+        missing: Once<&ast::Range>,
+    ) -> Option<(Choose, CountRange, CountRange)> {
+        let choose_loc = choose.loc().unwrap_or(block);
+        let (human_loc, missing_loc) = (human.loc(), missing.loc());
+        let (human_r, missing_r) = (human.get(), missing.get());
+        let example = "choose 3 of A, B, C, D, E into g1, g2, g3";
+        let c = choose.required(block, item, example, &mut self.errors)?;
+        let choose = self.choose(inv, c, choose_loc)?;
+        let human = count_range(human_r, human_loc);
+        let missing = count_range(missing_r, missing_loc);
+        self.ranges(human, missing, human_r, missing_r, choose.n)
+            .then_some((choose, human, missing))
+    }
+
     fn demo_set(&mut self, f: FileId, d: &ast::Demos) {
         let at = Loc::new(f, d.name.span);
         if !self.demos.declare(&d.name.text, at, &mut self.errors) {
@@ -956,25 +979,12 @@ impl Resolver<'_> {
         let block = Loc::new(f, d.span);
         let item = format!("demos block `{}`", d.name.text);
         let jitter_loc = jitter.loc();
-        let choose_loc = choose.loc().unwrap_or(block);
-        let (human_loc, missing_loc) = (human.loc(), missing.loc());
-        let human_r = human.get();
-        let missing_r = missing.get();
-        let Some(c) = choose.required(
-            block,
-            item,
-            "choose 3 of A, B, C, D, E into g1, g2, g3",
-            &mut self.errors,
-        ) else {
+        let Some((choose, human, missing)) =
+            self.generator(inv, block, item, choose, human, missing)
+        else {
             return;
         };
-        let Some(choose) = self.choose(inv, c, choose_loc) else {
-            return;
-        };
-        let human = count_range(human_r, human_loc);
-        let missing = count_range(missing_r, missing_loc);
-        if !self.ranges(human, missing, human_r, missing_r, choose.n) || self.errors.len() > before
-        {
+        if self.errors.len() > before {
             return;
         }
         self.demos
@@ -1104,26 +1114,13 @@ impl Resolver<'_> {
         let block = Loc::new(f, s.span);
         let item = format!("scenarios block `{}`", s.name.text);
         let jitter_loc = jitter.loc();
-        let choose_loc = choose.loc().unwrap_or(block);
-        let (human_loc, missing_loc) = (human.loc(), missing.loc());
-        let human_r = human.get();
-        let missing_r = missing.get();
         let count = count.required(block, item.clone(), "count 100", &mut self.errors);
-        let Some(c) = choose.required(
-            block,
-            item,
-            "choose 3 of A, B, C, D, E into g1, g2, g3",
-            &mut self.errors,
-        ) else {
+        let Some((choose, human, missing)) =
+            self.generator(inv, block, item, choose, human, missing)
+        else {
             return;
         };
-        let Some(choose) = self.choose(inv, c, choose_loc) else {
-            return;
-        };
-        let human = count_range(human_r, human_loc);
-        let missing = count_range(missing_r, missing_loc);
-        if !self.ranges(human, missing, human_r, missing_r, choose.n) || self.errors.len() > before
-        {
+        if self.errors.len() > before {
             return;
         }
         let Some(count) = count else {
