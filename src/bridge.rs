@@ -4,9 +4,10 @@
 
 use anyhow::{Context, bail};
 use packwright_compiler::Compiled;
-use packwright_compiler::artifact::{DemonstrationRecord, RobotRecord, WorldFile};
+use packwright_compiler::artifact::{CellRecord, DemonstrationRecord, RobotRecord, WorldFile};
+use packwright_compiler::emit::cell_record;
 use packwright_compiler::expand::Setup;
-use packwright_compiler::model::{Model, RobotModel};
+use packwright_compiler::model::Model;
 use packwright_runtime::execute::OrderTask;
 use packwright_runtime::robot::{Arm, from_urdf};
 use packwright_runtime::scene::{
@@ -20,14 +21,16 @@ pub struct Episode {
     pub placements: Vec<Placement>,
 }
 
-pub fn cell_scene(m: &Model, cell: usize) -> CellScene {
-    let c = &m.cells[cell];
+/// The runtime's scene of a cell, from its compiled record (the same for
+/// `execute`, which compiles in memory, and `demonstrate`, which reads
+/// `orders.json`).
+pub fn scene_of(cell: &CellRecord) -> CellScene {
     CellScene {
-        base: c.base,
-        suction: c.suction,
-        lift: c.lift,
-        pending: (c.pending.min, c.pending.max),
-        boxes: c
+        base: cell.base,
+        suction: cell.suction,
+        lift: cell.lift,
+        pending: (cell.pending.min, cell.pending.max),
+        boxes: cell
             .boxes
             .iter()
             .map(|b| BoxSpec {
@@ -36,22 +39,27 @@ pub fn cell_scene(m: &Model, cell: usize) -> CellScene {
                 size: b.size,
             })
             .collect(),
-        slots: c
+        slots: cell
             .slots
             .iter()
             .map(|s| SlotSpec {
                 name: s.name.clone(),
-                position: s.at,
-                box_index: s.box_index,
+                position: s.position,
+                box_index: cell
+                    .boxes
+                    .iter()
+                    .position(|b| b.name == s.box_name)
+                    .unwrap_or(0),
             })
             .collect(),
     }
 }
 
-pub fn arm(m: &Model, cell: usize) -> anyhow::Result<Arm> {
-    match &m.cells[cell].robot {
-        RobotModel::Ur10 => Ok(Arm::ur10()),
-        RobotModel::Urdf(path) => {
+/// The arm a cell names: the built-in UR10, or a URDF file.
+pub fn arm_of(robot: &RobotRecord) -> anyhow::Result<Arm> {
+    match robot {
+        RobotRecord::Ur10 => Ok(Arm::ur10()),
+        RobotRecord::Urdf(path) => {
             let text =
                 std::fs::read_to_string(path).with_context(|| format!("cannot read {path}"))?;
             from_urdf(&text).with_context(|| format!("robot description {path}"))
@@ -74,8 +82,9 @@ pub fn episode(m: &Model, setup: &Setup) -> anyhow::Result<Episode> {
             }
         })
         .collect();
+    let cell = cell_record(&m.cells[inv.cell]);
     let task = OrderTask {
-        cell: cell_scene(m, inv.cell),
+        cell: scene_of(&cell),
         products,
         assignment: setup.assignment.clone(),
     };
@@ -98,7 +107,7 @@ pub fn episode(m: &Model, setup: &Setup) -> anyhow::Result<Episode> {
         })
         .collect();
     Ok(Episode {
-        arm: arm(m, inv.cell)?,
+        arm: arm_of(&cell.robot)?,
         task,
         placements,
     })
@@ -161,34 +170,7 @@ pub fn demonstration_episode(
     let Some(inv) = world.inventories.iter().find(|i| i.name == demo.inventory) else {
         bail!("orders.json has no inventory `{}`", demo.inventory);
     };
-    let scene = CellScene {
-        base: cell.base,
-        suction: cell.suction,
-        lift: cell.lift,
-        pending: (cell.pending.min, cell.pending.max),
-        boxes: cell
-            .boxes
-            .iter()
-            .map(|b| BoxSpec {
-                name: b.name.clone(),
-                centre: b.centre,
-                size: b.size,
-            })
-            .collect(),
-        slots: cell
-            .slots
-            .iter()
-            .map(|s| SlotSpec {
-                name: s.name.clone(),
-                position: s.position,
-                box_index: cell
-                    .boxes
-                    .iter()
-                    .position(|b| b.name == s.box_name)
-                    .unwrap_or(0),
-            })
-            .collect(),
-    };
+    let scene = scene_of(cell);
     let products = inv
         .products
         .iter()
@@ -234,14 +216,7 @@ pub fn demonstration_episode(
             })
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
-    let arm = match &cell.robot {
-        RobotRecord::Ur10 => Arm::ur10(),
-        RobotRecord::Urdf(path) => {
-            let text =
-                std::fs::read_to_string(path).with_context(|| format!("cannot read {path}"))?;
-            from_urdf(&text).with_context(|| format!("robot description {path}"))?
-        }
-    };
+    let arm = arm_of(&cell.robot)?;
     Ok(Episode {
         arm,
         task: OrderTask {

@@ -6,7 +6,7 @@ use crate::artifact::*;
 use crate::dataset::{Graphs, slot_goal};
 use crate::error::Error;
 use crate::expand::{Expanded, Setup};
-use crate::model::{Model, RobotModel};
+use crate::model::{Cell, Model, RobotModel};
 use crate::source::SourceMap;
 use safetensors::tensor::{Dtype, TensorView};
 use serde::Serialize;
@@ -216,48 +216,49 @@ fn labels(m: &Model) -> LabelsFile {
     }
 }
 
+/// A cell as `orders.json` records it (lengths rounded to micrometres).
+pub fn cell_record(c: &Cell) -> CellRecord {
+    CellRecord {
+        name: c.name.clone(),
+        robot: match &c.robot {
+            RobotModel::Ur10 => RobotRecord::Ur10,
+            RobotModel::Urdf(p) => RobotRecord::Urdf(p.clone()),
+        },
+        base: r6n(c.base),
+        suction: r6(c.suction),
+        lift: r6(c.lift),
+        pending: RectRecord {
+            min: r6n(c.pending.min),
+            max: r6n(c.pending.max),
+        },
+        boxes: c
+            .boxes
+            .iter()
+            .map(|b| BoxRecord {
+                name: b.name.clone(),
+                centre: r6n(b.centre),
+                size: r6n(b.size),
+            })
+            .collect(),
+        slots: c
+            .slots
+            .iter()
+            .enumerate()
+            .map(|(i, s)| SlotRecord {
+                name: s.name.clone(),
+                label: i as u32 + 1,
+                box_name: c.boxes[s.box_index].name.clone(),
+                position: r6n(s.at),
+            })
+            .collect(),
+    }
+}
+
 fn world(m: &Model) -> WorldFile {
     WorldFile {
         schema: "packwright.orders".into(),
         version: SCHEMA_VERSION,
-        cells: m
-            .cells
-            .iter()
-            .map(|c| CellRecord {
-                name: c.name.clone(),
-                robot: match &c.robot {
-                    RobotModel::Ur10 => RobotRecord::Ur10,
-                    RobotModel::Urdf(p) => RobotRecord::Urdf(p.clone()),
-                },
-                base: r6n(c.base),
-                suction: r6(c.suction),
-                lift: r6(c.lift),
-                pending: RectRecord {
-                    min: r6n(c.pending.min),
-                    max: r6n(c.pending.max),
-                },
-                boxes: c
-                    .boxes
-                    .iter()
-                    .map(|b| BoxRecord {
-                        name: b.name.clone(),
-                        centre: r6n(b.centre),
-                        size: r6n(b.size),
-                    })
-                    .collect(),
-                slots: c
-                    .slots
-                    .iter()
-                    .enumerate()
-                    .map(|(i, s)| SlotRecord {
-                        name: s.name.clone(),
-                        label: i as u32 + 1,
-                        box_name: c.boxes[s.box_index].name.clone(),
-                        position: r6n(s.at),
-                    })
-                    .collect(),
-            })
-            .collect(),
+        cells: m.cells.iter().map(cell_record).collect(),
         products: m
             .products
             .iter()
