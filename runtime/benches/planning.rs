@@ -2,38 +2,22 @@
 //!
 //! `cargo bench -p packwright-runtime --bench planning`
 
+#[path = "../tests/common/mod.rs"]
+mod common;
+use common::bench_cell;
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{Isometry3, Point3};
 use packwright_runtime::collision::{Checker, ProductBody};
 use packwright_runtime::execute::reach;
 use packwright_runtime::robot::Arm;
 use packwright_runtime::rrt::{self, Query, RrtConfig};
-use packwright_runtime::scene::{BoxSpec, CellScene, SlotSpec};
 use std::f64::consts::FRAC_PI_2;
 use std::hint::black_box;
 
-fn cell() -> CellScene {
-    CellScene {
-        base: [0.0; 3],
-        suction: 0.1,
-        lift: 0.15,
-        pending: ([0.45, -0.5], [0.85, -0.1]),
-        boxes: vec![BoxSpec {
-            name: "tray".into(),
-            centre: [0.0, 0.65],
-            size: [0.4, 0.3, 0.08],
-        }],
-        slots: vec![SlotSpec {
-            name: "g1".into(),
-            position: [0.0, 0.6],
-            box_index: 0,
-        }],
-    }
-}
-
 fn bench(c: &mut Criterion) {
     let arm = Arm::ur10();
-    let cell = cell();
+    let cell = bench_cell();
     let mut checker = Checker::new(&arm, &cell);
     let cubes: Vec<ProductBody> = [
         [0.5, -0.2],

@@ -139,7 +139,6 @@ pub struct ProductBody {
 pub struct Checker {
     arm: Arm,
     base: Isometry3<f64>,
-    suction: f64,
     parts: Vec<Part>,
     names: Vec<String>,
     statics: Vec<Obstacle>,
@@ -223,7 +222,6 @@ impl Checker {
         let mut checker = Checker {
             arm: arm.clone(),
             base,
-            suction: cell.suction,
             parts,
             names,
             statics,
@@ -417,11 +415,6 @@ impl Checker {
             let q: Joints = std::array::from_fn(|j| q0[j] + (q1[j] - q0[j]) * t);
             self.check(&q, held, ignore)
         })
-    }
-
-    /// The suction cup's length (the tool point is its tip).
-    pub fn suction(&self) -> f64 {
-        self.suction
     }
 }
 

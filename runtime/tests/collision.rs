@@ -1,31 +1,14 @@
 //! Hand-made cases that must and must not collide, and RRT-Connect plans
 //! that must be valid when re-checked and reproducible from a seed.
 
+mod common;
+use common::bench_cell;
+
 use nalgebra::{Isometry3, Point3};
 use packwright_runtime::collision::{Checker, Held, ProductBody};
 use packwright_runtime::robot::{Arm, Joints};
 use packwright_runtime::rrt::{self, Query, RrtConfig};
-use packwright_runtime::scene::{BoxSpec, CellScene, SlotSpec};
 use std::f64::consts::FRAC_PI_2;
-
-fn cell() -> CellScene {
-    CellScene {
-        base: [0.0, 0.0, 0.0],
-        suction: 0.1,
-        lift: 0.15,
-        pending: ([0.45, -0.5], [0.85, -0.1]),
-        boxes: vec![BoxSpec {
-            name: "tray".into(),
-            centre: [0.0, 0.65],
-            size: [0.4, 0.3, 0.08],
-        }],
-        slots: vec![SlotSpec {
-            name: "g1".into(),
-            position: [0.0, 0.6],
-            box_index: 0,
-        }],
-    }
-}
 
 /// A point at `radius` from the base axis, `degrees` around it, at height `z`.
 fn polar(radius: f64, degrees: f64, z: f64) -> [f64; 3] {
@@ -68,7 +51,7 @@ fn cube(name: &str, centre: [f64; 3], edge: f64) -> ProductBody {
 #[test]
 fn free_configurations_are_free() {
     let arm = Arm::ur10();
-    let checker = Checker::new(&arm, &cell());
+    let checker = Checker::new(&arm, &bench_cell());
     assert_eq!(checker.check(&UPRIGHT, None, None), None);
     let above_pending = ik(&arm, [0.6, -0.3, 0.3]);
     assert_eq!(checker.check(&above_pending, None, None), None);
@@ -79,7 +62,7 @@ fn free_configurations_are_free() {
 #[test]
 fn the_arm_in_the_table_collides() {
     let arm = Arm::ur10();
-    let checker = Checker::new(&arm, &cell());
+    let checker = Checker::new(&arm, &bench_cell());
     // Shoulder tipped forward past horizontal: the arm goes down through the table.
     let q = [0.0, 0.6, 0.0, -FRAC_PI_2, 0.0, 0.0];
     let hit = checker.check(&q, None, None).expect("a collision");
@@ -89,7 +72,7 @@ fn the_arm_in_the_table_collides() {
 #[test]
 fn products_are_obstacles_except_the_one_being_picked() {
     let arm = Arm::ur10();
-    let mut checker = Checker::new(&arm, &cell());
+    let mut checker = Checker::new(&arm, &bench_cell());
     checker.set_products(&[cube("A", [0.6, -0.3, 0.025], 0.05)]);
     // The cup's tip on A's top face: touching A is fine when picking A.
     let on_top = ik(&arm, [0.6, -0.3, 0.05]);
@@ -110,7 +93,7 @@ fn products_are_obstacles_except_the_one_being_picked() {
 #[test]
 fn a_motion_through_an_obstacle_collides_between_free_ends() {
     let arm = Arm::ur10();
-    let mut checker = Checker::new(&arm, &cell());
+    let mut checker = Checker::new(&arm, &bench_cell());
     // Two ends 50 degrees apart around the base, a tall product between.
     let a = ik(&arm, polar(0.6, -60.0, 0.15));
     let b = ik(&arm, polar(0.6, -10.0, 0.15));
@@ -126,7 +109,7 @@ fn a_motion_through_an_obstacle_collides_between_free_ends() {
 #[test]
 fn a_held_product_collides_with_the_box_wall() {
     let arm = Arm::ur10();
-    let checker = Checker::new(&arm, &cell());
+    let checker = Checker::new(&arm, &bench_cell());
     let held = Held {
         name: "A".into(),
         size: [0.05; 3],
@@ -151,7 +134,7 @@ fn a_held_product_collides_with_the_box_wall() {
 #[test]
 fn rrt_connect_plans_valid_and_reproducible_paths() {
     let arm = Arm::ur10();
-    let mut checker = Checker::new(&arm, &cell());
+    let mut checker = Checker::new(&arm, &bench_cell());
     let a = ik(&arm, polar(0.6, -60.0, 0.15));
     let b = ik(&arm, polar(0.6, -10.0, 0.15));
     checker.set_products(&[post(polar(0.6, -35.0, 0.15))]);

@@ -1,36 +1,13 @@
 //! Packing orders end to end in the simulator, with the scripted expert and
 //! with RRT-Connect.
 
+mod common;
+use common::bench_cell;
+
 use packwright_runtime::execute::{self, OrderTask, Outcome, PlannerKind};
 use packwright_runtime::robot::Arm;
-use packwright_runtime::scene::{BoxSpec, CellScene, Placement, ProductSpec, SlotSpec};
+use packwright_runtime::scene::{Placement, ProductSpec};
 use packwright_runtime::sim::Simulator;
-
-fn cell() -> CellScene {
-    let slot = |name: &str, x: f64, y: f64| SlotSpec {
-        name: name.into(),
-        position: [x, y],
-        box_index: 0,
-    };
-    CellScene {
-        base: [0.0, 0.0, 0.0],
-        suction: 0.1,
-        lift: 0.15,
-        pending: ([0.45, -0.5], [0.85, -0.1]),
-        boxes: vec![BoxSpec {
-            name: "tray".into(),
-            centre: [0.0, 0.65],
-            size: [0.4, 0.3, 0.08],
-        }],
-        slots: vec![
-            slot("g1", -0.12, 0.58),
-            slot("g2", 0.0, 0.58),
-            slot("g3", 0.12, 0.58),
-            slot("g4", -0.06, 0.72),
-            slot("g5", 0.06, 0.72),
-        ],
-    }
-}
 
 fn products() -> Vec<(ProductSpec, [f64; 2])> {
     let p = |name: &str, size: [f64; 3], at: [f64; 2]| {
@@ -61,7 +38,7 @@ fn run(
     planner: PlannerKind,
 ) -> execute::Report {
     let arm = Arm::ur10();
-    let cell = cell();
+    let cell = bench_cell();
     let inventory = products();
     let specs: Vec<ProductSpec> = inventory.iter().map(|(s, _)| s.clone()).collect();
     let mut assignment: Vec<(usize, usize)> = assign
