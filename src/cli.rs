@@ -61,6 +61,25 @@ pub enum Command {
     /// README). Exit 1 if some demonstration could not be replayed (the
     /// others are written).
     Demonstrate(DemonstrateArgs),
+    /// Learn the reasoner, the sub-goal planner and the dynamics policy.
+    ///
+    /// Replays the compiled demonstrations with the scripted expert in the
+    /// simulator to record motion, then trains the three networks (Adam,
+    /// seeded, early stopping on a 20% held-out split) and writes
+    /// config.json, reasoner.safetensors, subgoal.safetensors,
+    /// dynamics.safetensors and metrics.json. Exit 1 if some
+    /// demonstration could not be replayed (the model is still written).
+    Train(TrainArgs),
+    /// Measure success rates and planning times over scenario suites.
+    ///
+    /// Runs every scenario of the suites in the simulator (in parallel)
+    /// with the learned planner and, with `--baselines`, RRT-Connect and
+    /// the expert, and prints per suite and planner: the reasoner's success
+    /// rate (every decision right), the whole system's success rate with a
+    /// Wilson 95% interval, with and without fallbacks, fallbacks per
+    /// package, planning time per decision and per sub-goal (median and
+    /// p99, microseconds) and simulated execution time per product.
+    Eval(EvalArgs),
     /// Lay out .pack files canonically (comments are kept).
     ///
     /// Rewrites each file in place, atomically, unless `--check` or
@@ -109,6 +128,10 @@ pub enum PlannerArg {
     Expert,
     /// The same sub-goals joined by RRT-Connect (the baseline).
     Rrt,
+    /// The trained networks: the reasoner chooses, the sub-goal planner
+    /// and the dynamics policy move; RRT-Connect when a motion would
+    /// collide or fall short.
+    Learned,
 }
 
 #[derive(Debug, Args)]
@@ -123,9 +146,14 @@ pub struct ExecuteArgs {
     /// suite such as `case1_3of5/007`.
     #[arg(long, value_name = "NAME")]
     pub scenario: Option<String>,
-    /// Who plans the motion.
-    #[arg(long, value_enum, default_value = "expert")]
-    pub planner: PlannerArg,
+    /// Who plans the motion. Default: `learned` when `--model` is given or
+    /// the bundled model was trained on the order's cell, else `expert`.
+    #[arg(long, value_enum)]
+    pub planner: Option<PlannerArg>,
+    /// A model directory written by `packwright train` (default: the
+    /// bundled model, trained on `orders/`).
+    #[arg(long, value_name = "MODEL_DIR")]
+    pub model: Option<PathBuf>,
     /// Seed of the RRT-Connect planner.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -145,6 +173,70 @@ pub struct DemonstrateArgs {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// A directory written by `packwright compile` with demonstrations.
+    #[arg(value_name = "DIR")]
+    pub dir: PathBuf,
+    /// The model directory to write (replaced atomically).
+    #[arg(short, long, value_name = "MODEL_DIR")]
+    pub output: PathBuf,
+    /// Learn from these `demo`/`demos` blocks only (default: all of them;
+    /// they must be in one cell).
+    #[arg(long = "demos", value_name = "NAME", num_args = 1..)]
+    pub demos: Vec<String>,
+    /// Seed of the initial weights, the split and the batches.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Most epochs per network (early stopping on the held-out split
+    /// usually ends sooner).
+    #[arg(long, value_name = "N")]
+    pub epochs: Option<usize>,
+    /// No progress bars.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Print the metrics as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// The .pack files with the `scenarios` suites (files they `use` are
+    /// read too).
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+    /// A model directory written by `packwright train` (default: the
+    /// bundled model).
+    #[arg(long, value_name = "MODEL_DIR")]
+    pub model: Option<PathBuf>,
+    /// Evaluate these suites only (default: every suite in the files).
+    #[arg(long = "suite", value_name = "NAME", num_args = 1..)]
+    pub suites: Vec<String>,
+    /// Also run the RRT-Connect and expert planners on every scenario.
+    #[arg(long)]
+    pub baselines: bool,
+    /// Only the reasoner's decisions, no motion (fast).
+    #[arg(long)]
+    pub reasoner_only: bool,
+    /// The first N scenarios of each suite only.
+    #[arg(long, value_name = "N")]
+    pub limit: Option<usize>,
+    /// Seed of RRT-Connect (scenario i uses seed + i): a run is
+    /// reproducible from it.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Also write the table as Markdown to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub markdown: Option<PathBuf>,
+    /// Print every figure as JSON instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(Debug, Args)]

@@ -53,23 +53,30 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         })
 }
 
-/// True if `dir` may be replaced: it holds nothing, or earlier artifacts.
-fn replaceable(dir: &Path) -> anyhow::Result<bool> {
+/// True if `dir` may be replaced: it holds nothing, or earlier output
+/// (it has the file `marker`).
+fn replaceable(dir: &Path, marker: &str) -> anyhow::Result<bool> {
     let mut entries =
         fs::read_dir(dir).with_context(|| format!("cannot read {}", dir.display()))?;
-    Ok(entries.next().is_none() || dir.join("manifest.json").is_file())
+    Ok(entries.next().is_none() || dir.join(marker).is_file())
 }
 
 /// Writes the artifacts into `dir`: first into a temporary sibling
 /// directory, then swapped into place, so that `dir` is never half-written.
-pub fn write_dir_atomically(dir: &Path, artifacts: &[Artifact]) -> anyhow::Result<()> {
+/// An existing `dir` is replaced only if it is empty or holds `marker` (the
+/// file every earlier output of the same command has).
+pub fn write_dir_atomically(
+    dir: &Path,
+    artifacts: &[Artifact],
+    marker: &str,
+) -> anyhow::Result<()> {
     if dir.exists() {
         if !dir.is_dir() {
             bail!("{} exists and is not a directory", dir.display());
         }
-        if !replaceable(dir)? {
+        if !replaceable(dir, marker)? {
             bail!(
-                "refusing to replace {}: it is not empty and holds no manifest.json from an earlier compile",
+                "refusing to replace {}: it is not empty and holds no {marker} from an earlier run",
                 dir.display()
             );
         }

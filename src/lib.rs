@@ -26,6 +26,8 @@ pub mod bridge;
 pub mod cli;
 pub mod commands;
 pub mod fsio;
+pub mod learning;
+pub mod stats;
 
 use std::process::ExitCode;
 
@@ -54,6 +56,8 @@ pub fn run(cli: cli::Cli) -> anyhow::Result<Exit> {
         cli::Command::Show(args) => commands::show::run(&args),
         cli::Command::Execute(args) => commands::execute::run(&args),
         cli::Command::Demonstrate(args) => commands::demonstrate::run(&args),
+        cli::Command::Train(args) => commands::train::run(&args),
+        cli::Command::Eval(args) => commands::eval::run(&args),
         cli::Command::Fmt(args) => commands::fmt::run(&args),
     }
 }

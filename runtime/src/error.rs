@@ -16,4 +16,7 @@ pub enum RuntimeError {
     /// The simulator refused an input or lost its state.
     #[error("simulation: {0}")]
     Simulation(String),
+    /// A model directory that cannot be loaded or saved.
+    #[error("model: {0}")]
+    Model(String),
 }

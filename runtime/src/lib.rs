@@ -9,6 +9,7 @@ pub mod collision;
 pub mod error;
 pub mod execute;
 pub mod expert;
+pub mod learn;
 pub mod record;
 pub mod robot;
 pub mod rrt;

@@ -36,6 +36,8 @@ pub struct ActionSample {
     /// Index into [`MotionLog::subgoals`].
     pub subgoal: usize,
     pub delta: [f64; 3],
+    /// Base, shoulder and elbow positions when the action is taken.
+    pub joints: [f64; 3],
     /// Joint steps of base, shoulder, elbow (radians).
     pub action: [f64; 3],
 }
@@ -56,9 +58,22 @@ pub fn spread(len: usize, n: usize) -> Vec<usize> {
 }
 
 /// The expert's action at `q` towards `goal`: the base, shoulder and elbow
-/// differences, each clipped to ±[`MAX_ACTION`].
+/// differences, scaled down together so that none exceeds
+/// ±[`MAX_ACTION`] (the step stays on the straight joint-space line the
+/// expert moves along).
 pub fn action(q: &[f64; 6], goal: &[f64; 6]) -> [f64; 3] {
-    std::array::from_fn(|j| (goal[j] - q[j]).clamp(-MAX_ACTION, MAX_ACTION))
+    clip([goal[0] - q[0], goal[1] - q[1], goal[2] - q[2]])
+}
+
+/// `step` scaled down, direction kept, so that no joint moves more than
+/// [`MAX_ACTION`].
+pub fn clip(step: [f64; 3]) -> [f64; 3] {
+    let largest = step.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if largest > MAX_ACTION {
+        step.map(|v| v * MAX_ACTION / largest)
+    } else {
+        step
+    }
 }
 
 #[cfg(test)]
@@ -72,6 +87,8 @@ mod tests {
         assert_eq!(s.len(), 20);
         assert_eq!((s[0], s[19]), (0, 999));
         let a = action(&[0.0; 6], &[1.0, -0.01, -1.0, 0.0, 0.0, 0.0]);
-        assert_eq!(a, [MAX_ACTION, -0.01, -MAX_ACTION]);
+        assert_eq!(a, [MAX_ACTION, -0.01 * MAX_ACTION, -MAX_ACTION]);
+        let small = action(&[0.0; 6], &[0.01, -0.02, 0.03, 1.0, 1.0, 1.0]);
+        assert_eq!(small, [0.01, -0.02, 0.03]);
     }
 }

@@ -10,7 +10,7 @@ pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
         Ok(ok) => ok,
         Err(failed) => return Ok(report_failure(&failed, args.json)),
     };
-    write_dir_atomically(&args.output, &artifacts)?;
+    write_dir_atomically(&args.output, &artifacts, "manifest.json")?;
     if args.json {
         let files: Vec<_> = artifacts
             .iter()

@@ -87,6 +87,12 @@ fn tensors(log: &MotionLog, demo_of: &[i64]) -> anyhow::Result<Vec<u8>> {
             f32s(a.iter().map(|x| x.action)),
         ),
         (
+            "action_state",
+            Dtype::F32,
+            vec![k, 3],
+            f32s(a.iter().map(|x| x.joints)),
+        ),
+        (
             "action_subgoal",
             Dtype::I64,
             vec![k],

@@ -4,9 +4,13 @@ use crate::Exit;
 use crate::bridge::{episode, find_setup};
 use crate::cli::{ExecuteArgs, PlannerArg};
 use crate::fsio::FsLoader;
-use anyhow::Context;
+use crate::learning::{default_model, load_model};
+use anyhow::{Context, bail};
+use packwright_compiler::expand::Setup;
 use packwright_runtime::execute::{self, Outcome, PlannerKind, Report};
+use packwright_runtime::learn::Networks;
 use packwright_runtime::sim::Simulator;
+use std::path::Path;
 
 fn outcome(o: &Outcome) -> String {
     match o {
@@ -25,6 +29,8 @@ pub fn to_json(name: &str, r: &Report) -> serde_json::Value {
         "complete": r.complete,
         "simulated_s": r.time_s,
         "collisions": r.collisions,
+        "fallbacks": r.fallbacks,
+        "violations": r.violations,
         "products": r.products.iter().map(|p| serde_json::json!({
             "product": p.product,
             "slot": p.slot,
@@ -43,6 +49,45 @@ pub fn to_json(name: &str, r: &Report) -> serde_json::Value {
     })
 }
 
+/// The name of the cell a setup packs in.
+pub fn cell_of(compiled: &packwright_compiler::Compiled, setup: &Setup) -> String {
+    let m = &compiled.model;
+    m.inventories
+        .get(setup.inventory)
+        .and_then(|inv| m.cells.get(inv.cell))
+        .map(|c| c.name.clone())
+        .unwrap_or_default()
+}
+
+/// The planner to use and, for `learned`, its networks: `--model`, or the
+/// bundled model when it was trained on `cell`.
+pub fn choose_planner(
+    asked: Option<PlannerArg>,
+    model: Option<&Path>,
+    cell: &str,
+) -> anyhow::Result<(PlannerArg, Option<Networks>)> {
+    let nets = match (asked, model) {
+        (Some(PlannerArg::Expert | PlannerArg::Rrt), _) => None,
+        (_, Some(dir)) => Some(load_model(dir)?),
+        (Some(PlannerArg::Learned), None) => Some(default_model()?),
+        (None, None) => default_model().ok().filter(|n| n.task.cell == cell),
+    };
+    if let Some(n) = &nets
+        && n.task.cell != cell
+    {
+        bail!(
+            "the model was trained on cell `{}`, this order packs in cell `{cell}`: train a model on its demonstrations (`packwright train`)",
+            n.task.cell
+        );
+    }
+    let planner = match (asked, &nets) {
+        (Some(p), _) => p,
+        (None, Some(_)) => PlannerArg::Learned,
+        (None, None) => PlannerArg::Expert,
+    };
+    Ok((planner, nets))
+}
+
 pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
     let compiled = match packwright_compiler::check(&FsLoader, &args.files) {
         Ok(c) => c,
@@ -54,11 +99,18 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
     let start = execute::home(&ep.arm, cell)
         .context("the arm cannot reach a start pose over the pending area")?;
     let mut sim = Simulator::new(ep.arm.clone(), cell, &ep.placements, start)?;
-    let planner = match args.planner {
-        PlannerArg::Expert => PlannerKind::Expert,
-        PlannerArg::Rrt => PlannerKind::Rrt { seed: args.seed },
+    let cell_name = cell_of(&compiled, &setup);
+    let (planner, model) = choose_planner(args.planner, args.model.as_deref(), &cell_name)?;
+    let report = match (&model, planner) {
+        (Some(nets), _) => execute::run_learned(&mut sim, &ep.arm, &ep.task, nets, args.seed),
+        (None, PlannerArg::Rrt) => execute::run(
+            &mut sim,
+            &ep.arm,
+            &ep.task,
+            PlannerKind::Rrt { seed: args.seed },
+        ),
+        (None, _) => execute::run(&mut sim, &ep.arm, &ep.task, PlannerKind::Expert),
     };
-    let report = execute::run(&mut sim, &ep.arm, &ep.task, planner);
     if args.json {
         outln!(
             "{}",
@@ -113,6 +165,22 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
             count(|o| matches!(o, Outcome::Failed(_))),
             report.time_s
         );
+        if report.planner == "learned" {
+            outln!(
+                "learned planner: {} fallback{} to RRT-Connect, {} violation{}",
+                report.fallbacks,
+                if report.fallbacks == 1 { "" } else { "s" },
+                report.violations.len(),
+                if report.violations.len() == 1 {
+                    ""
+                } else {
+                    "s"
+                },
+            );
+            for v in &report.violations {
+                outln!("  the reasoner {v}: the arm stopped");
+            }
+        }
     }
     Ok(if report.complete {
         Exit::Success

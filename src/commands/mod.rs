@@ -3,9 +3,11 @@
 pub mod check;
 pub mod compile;
 pub mod demonstrate;
+pub mod eval;
 pub mod execute;
 pub mod fmt;
 pub mod show;
+pub mod train;
 
 use crate::Exit;
 use packwright_compiler::{Compiled, Failed, diagnostic};

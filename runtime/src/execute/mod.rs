@@ -27,6 +27,11 @@ use nalgebra::{Isometry3, Point3};
 use std::f64::consts::FRAC_PI_2;
 use std::time::Instant;
 
+mod learned;
+pub use learned::{
+    MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, expected_next, reasoner_trial, run_learned,
+};
+
 /// A product is packed when its centre is this close to its slot goal.
 pub const SUCCESS_RADIUS: f64 = 0.02;
 /// How much a release point is raised at a time when the wrist cannot
@@ -102,6 +107,19 @@ pub struct ProductReport {
     pub outcome: Outcome,
 }
 
+/// Planning times, microseconds of wall clock.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Timing {
+    /// Per decision of what to handle next (the reasoner, or the expert's
+    /// sequence rule).
+    pub decision_us: Vec<f64>,
+    /// Per sub-goal: finding it and planning the motion to it.
+    pub subgoal_us: Vec<f64>,
+    /// Learned planner only: one sub-goal planner call plus one dynamics
+    /// policy call.
+    pub network_us: Vec<f64>,
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct Report {
     pub planner: &'static str,
@@ -111,6 +129,12 @@ pub struct Report {
     /// Contacts the world reported, as "a / b".
     pub collisions: Vec<String>,
     pub time_s: f64,
+    /// Learned planner: stages handed to RRT-Connect.
+    pub fallbacks: usize,
+    /// Learned planner: decisions that broke the order (a product it does
+    /// not select, one already packed, a wrong slot); the arm stopped.
+    pub violations: Vec<String>,
+    pub timing: Timing,
 }
 
 fn seen_centre(obs: &Observation, name: &str) -> Option<([f64; 3], f64)> {
@@ -137,6 +161,10 @@ struct Runner<'a, W: World> {
     planning_s: f64,
     execution_steps: usize,
     log: Option<&'a mut MotionLog>,
+    timing: Timing,
+    /// How high a lone release sub-goal may be raised (the previous
+    /// sub-goal's height), when `plan_stage` is not given that sub-goal.
+    ceiling: Option<f64>,
 }
 
 /// What a stage's sub-goals are recorded with.
@@ -178,6 +206,7 @@ impl<W: World> Runner<'_, W> {
         let mut out = Vec::new();
         let mut current = from;
         for (k, g) in goals.iter().enumerate() {
+            let subgoal_started = Instant::now();
             let solve = |z: f64| {
                 let tip = Point3::new(g.tip[0], g.tip[1], z);
                 let q = reach(
@@ -203,7 +232,7 @@ impl<W: World> Runner<'_, W> {
             // rest of the way.
             let release_ceiling = goals
                 .get(k.wrapping_sub(1))
-                .map_or(g.tip[2], |prev| prev.tip[2]);
+                .map_or(self.ceiling.unwrap_or(g.tip[2]), |prev| prev.tip[2]);
             let target = solve(g.tip[2])
                 .or_else(|| {
                     (g.suction == Suction::Off)
@@ -243,6 +272,9 @@ impl<W: World> Runner<'_, W> {
             };
             out.push((path, g.suction));
             current = target;
+            self.timing
+                .subgoal_us
+                .push(subgoal_started.elapsed().as_secs_f64() * 1e6);
         }
         self.planning_s += started.elapsed().as_secs_f64();
         Ok(out)
@@ -281,6 +313,7 @@ impl<W: World> Runner<'_, W> {
             log.actions.push(ActionSample {
                 subgoal,
                 delta: std::array::from_fn(|j| target[j] - here[j]),
+                joints: [along[i][0], along[i][1], along[i][2]],
                 action: record::action(&along[i], goal),
             });
         }
@@ -303,30 +336,37 @@ impl<W: World> Runner<'_, W> {
             if let (Some(info), Some(goal)) = (info, path.last()) {
                 self.record(info, k, &start, goal, &samples);
             }
-            for q in &samples {
-                self.world.command(q).map_err(|e| e.to_string())?;
-                self.world.step().map_err(|e| e.to_string())?;
-                self.execution_steps += 1;
+            self.send(&samples, suction)?;
+        }
+        Ok(())
+    }
+
+    /// Sends checked commands, then switches the suction and lets things
+    /// settle; fails on any contact the world reports.
+    fn send(&mut self, samples: &[Joints], suction: Suction) -> Result<(), Failure> {
+        for q in samples {
+            self.world.command(q).map_err(|e| e.to_string())?;
+            self.world.step().map_err(|e| e.to_string())?;
+            self.execution_steps += 1;
+        }
+        let settle = match suction {
+            Suction::Keep => 0,
+            Suction::On => {
+                self.world.set_suction(true).map_err(|e| e.to_string())?;
+                SUCTION_SETTLE
             }
-            let settle = match suction {
-                Suction::Keep => 0,
-                Suction::On => {
-                    self.world.set_suction(true).map_err(|e| e.to_string())?;
-                    SUCTION_SETTLE
-                }
-                Suction::Off => {
-                    self.world.set_suction(false).map_err(|e| e.to_string())?;
-                    RELEASE_SETTLE
-                }
-            };
-            for _ in 0..settle {
-                self.world.step().map_err(|e| e.to_string())?;
-                self.execution_steps += 1;
+            Suction::Off => {
+                self.world.set_suction(false).map_err(|e| e.to_string())?;
+                RELEASE_SETTLE
             }
-            let contacts = self.world.take_collisions();
-            if let Some(c) = contacts.first() {
-                return Err(format!("collision: {} with {}", c.a, c.b));
-            }
+        };
+        for _ in 0..settle {
+            self.world.step().map_err(|e| e.to_string())?;
+            self.execution_steps += 1;
+        }
+        let contacts = self.world.take_collisions();
+        if let Some(c) = contacts.first() {
+            return Err(format!("collision: {} with {}", c.a, c.b));
         }
         Ok(())
     }
@@ -502,12 +542,15 @@ pub fn run_recorded<W: World>(
         planning_s: 0.0,
         execution_steps: 0,
         log,
+        timing: Timing::default(),
+        ceiling: None,
     };
     let period = runner.world.control_period();
     let mut products = Vec::new();
     let mut stopped = false;
     let mut collisions = Vec::new();
     for &(p, s) in &task.assignment {
+        let decided = Instant::now();
         let spec = &task.products[p];
         let goal = task.goal(p, s);
         let mut report = ProductReport {
@@ -527,6 +570,10 @@ pub fn run_recorded<W: World>(
             }
             Some(_) if stopped => {}
             Some(_) => {
+                runner
+                    .timing
+                    .decision_us
+                    .push(decided.elapsed().as_secs_f64() * 1e6);
                 runner.planning_s = 0.0;
                 runner.execution_steps = 0;
                 let result = runner.manipulate(p, s);
@@ -554,7 +601,18 @@ pub fn run_recorded<W: World>(
         }
         products.push(report);
     }
-    // Products knocked out of place later count too.
+    finish(&mut runner, products, collisions, planner.name())
+}
+
+/// The report once the arm has stopped: products knocked out of place
+/// later count as failed too.
+fn finish<W: World>(
+    runner: &mut Runner<'_, W>,
+    mut products: Vec<ProductReport>,
+    collisions: Vec<String>,
+    planner: &'static str,
+) -> Report {
+    let task = runner.task;
     let last = runner.world.observe();
     for (report, &(p, s)) in products.iter_mut().zip(&task.assignment) {
         if matches!(report.outcome, Outcome::Packed | Outcome::AlreadyPacked) {
@@ -571,10 +629,13 @@ pub fn run_recorded<W: World>(
         .all(|r| matches!(r.outcome, Outcome::Packed | Outcome::AlreadyPacked))
         && collisions.is_empty();
     Report {
-        planner: planner.name(),
+        planner,
         products,
         complete,
         collisions,
         time_s: last.time,
+        fallbacks: 0,
+        violations: Vec::new(),
+        timing: std::mem::take(&mut runner.timing),
     }
 }

@@ -1,0 +1,232 @@
+//! Training samples, as plain numbers, and their batching into tensors.
+
+use burn::prelude::*;
+
+/// Scale of the dynamics policy's outputs: actions are learnt as fractions
+/// of the largest joint step (5 degrees).
+pub const ACTION_SCALE: f32 = crate::record::MAX_ACTION as f32;
+
+/// Inputs per node: (x, y, z, I) and the node's place along the chain,
+/// 0 for the first present product to 1 for the last.
+pub const NODE_FEATURES: usize = 5;
+
+/// One reasoner decision: the graph of the present products at the start of
+/// a stage and what the demonstrator did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GraphExample {
+    /// (x, y, z, I) of each present product, in inventory order.
+    pub nodes: Vec<[f32; 4]>,
+    /// The handled product's goal position.
+    pub goal: [f32; 3],
+    /// The chosen node, or `nodes.len()` for the box.
+    pub target: usize,
+    /// 0 = pick, k = the k-th slot of the cell.
+    pub label: usize,
+}
+
+/// One sub-goal issued by the demonstrator.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SubGoalExample {
+    /// The selected feature: product centre (picking) or box top centre
+    /// (placing).
+    pub feature: [f32; 3],
+    /// The tool tip when the sub-goal was issued.
+    pub tool: [f32; 3],
+    pub label: usize,
+    /// 0, 1, 2: which of the stage's three sub-goals.
+    pub index: usize,
+    /// The tool tip reached.
+    pub target: [f32; 3],
+}
+
+/// One joint action of the demonstrator.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ActionExample {
+    /// Sub-goal minus tool tip.
+    pub delta: [f32; 3],
+    /// Base, shoulder and elbow positions when the action was taken.
+    pub joints: [f32; 3],
+    /// Base, shoulder and elbow steps (radians, at most 5 degrees each).
+    pub action: [f32; 3],
+}
+
+/// Everything the three networks learn from.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TrainingSet {
+    pub graphs: Vec<GraphExample>,
+    pub subgoals: Vec<SubGoalExample>,
+    pub actions: Vec<ActionExample>,
+    /// Number of labels: `pick` plus the cell's slots.
+    pub labels: usize,
+}
+
+pub(crate) fn matrix(rows: usize, cols: usize, data: Vec<f32>, device: &Device) -> Tensor<2> {
+    Tensor::from_data(TensorData::new(data, [rows, cols]), device)
+}
+
+fn cube(shape: [usize; 3], data: Vec<f32>, device: &Device) -> Tensor<3> {
+    Tensor::from_data(TensorData::new(data, shape), device)
+}
+
+fn one_hot(out: &mut Vec<f32>, index: usize, width: usize) {
+    out.extend((0..width).map(|i| if i == index { 1.0 } else { 0.0 }));
+}
+
+/// A batch of graphs padded to the largest node count `m`.
+#[derive(Debug, Clone)]
+pub struct GraphBatch {
+    /// [B, m, NODE_FEATURES].
+    pub nodes: Tensor<3>,
+    /// [B, m, m]: chain neighbours, each row divided by its degree (mean
+    /// aggregation).
+    pub adjacency: Tensor<3>,
+    /// [B, m, 1]: 1 for a present node, 0 for padding.
+    pub mask: Tensor<3>,
+    /// [B, m + 1]: 0 for a real output, -1e9 for padding.
+    pub score_mask: Tensor<2>,
+    /// [B, 3].
+    pub goal: Tensor<2>,
+    /// [B, m + 1] one-hot of the chosen output (the box is column m).
+    pub target: Tensor<2>,
+    /// [B, labels] one-hot.
+    pub label: Tensor<2>,
+}
+
+/// The graph inputs of `graphs` (nodes, adjacency, masks) as flat vectors:
+/// shared by training batches and single inference calls.
+pub(crate) struct GraphInputs {
+    pub b: usize,
+    pub m: usize,
+    pub nodes: Vec<f32>,
+    pub adjacency: Vec<f32>,
+    pub mask: Vec<f32>,
+    pub score_mask: Vec<f32>,
+}
+
+pub(crate) fn graph_inputs<'a>(
+    graphs: impl ExactSizeIterator<Item = &'a [[f32; 4]]> + Clone,
+) -> GraphInputs {
+    let b = graphs.len();
+    let m = graphs.clone().map(<[_]>::len).max().unwrap_or(0).max(1);
+    let mut g = GraphInputs {
+        b,
+        m,
+        nodes: Vec::with_capacity(b * m * NODE_FEATURES),
+        adjacency: vec![0.0; b * m * m],
+        mask: Vec::with_capacity(b * m),
+        score_mask: Vec::with_capacity(b * (m + 1)),
+    };
+    for (k, nodes) in graphs.enumerate() {
+        let n = nodes.len();
+        let last = n.saturating_sub(1).max(1) as f32;
+        for i in 0..m {
+            g.nodes.extend(nodes.get(i).copied().unwrap_or([0.0; 4]));
+            g.nodes.push(if i < n { i as f32 / last } else { 0.0 });
+            g.mask.push(if i < n { 1.0 } else { 0.0 });
+            g.score_mask.push(if i < n { 0.0 } else { -1e9 });
+        }
+        g.score_mask.push(0.0);
+        for i in 0..n {
+            let neighbours: Vec<usize> = [i.checked_sub(1), (i + 1 < n).then_some(i + 1)]
+                .into_iter()
+                .flatten()
+                .collect();
+            for &j in &neighbours {
+                g.adjacency[k * m * m + i * m + j] = 1.0 / neighbours.len() as f32;
+            }
+        }
+    }
+    g
+}
+
+impl GraphInputs {
+    pub fn tensors(self, device: &Device) -> (Tensor<3>, Tensor<3>, Tensor<3>, Tensor<2>) {
+        let (b, m) = (self.b, self.m);
+        (
+            cube([b, m, NODE_FEATURES], self.nodes, device),
+            cube([b, m, m], self.adjacency, device),
+            cube([b, m, 1], self.mask, device),
+            matrix(b, m + 1, self.score_mask, device),
+        )
+    }
+}
+
+pub fn graph_batch(examples: &[&GraphExample], labels: usize, device: &Device) -> GraphBatch {
+    let inputs = graph_inputs(examples.iter().map(|e| e.nodes.as_slice()));
+    let (b, m) = (inputs.b, inputs.m);
+    let (nodes, adjacency, mask, score_mask) = inputs.tensors(device);
+    let mut goal = Vec::with_capacity(b * 3);
+    let mut target = Vec::with_capacity(b * (m + 1));
+    let mut label = Vec::with_capacity(b * labels);
+    for e in examples {
+        goal.extend(e.goal);
+        let column = if e.target >= e.nodes.len() {
+            m
+        } else {
+            e.target
+        };
+        one_hot(&mut target, column, m + 1);
+        one_hot(&mut label, e.label, labels);
+    }
+    GraphBatch {
+        nodes,
+        adjacency,
+        mask,
+        score_mask,
+        goal: matrix(b, 3, goal, device),
+        target: matrix(b, m + 1, target, device),
+        label: matrix(b, labels, label, device),
+    }
+}
+
+/// The sub-goal planner's input row: feature, tool − feature, one-hot
+/// label, one-hot sub-goal index.
+pub(crate) fn subgoal_input(
+    out: &mut Vec<f32>,
+    feature: [f32; 3],
+    tool: [f32; 3],
+    label: usize,
+    index: usize,
+    labels: usize,
+) {
+    out.extend(feature);
+    out.extend((0..3).map(|j| tool[j] - feature[j]));
+    one_hot(out, label, labels);
+    one_hot(out, index, 3);
+}
+
+pub fn subgoal_width(labels: usize) -> usize {
+    6 + labels + 3
+}
+
+/// Inputs [B, width] and targets (sub-goal − feature) [B, 3].
+pub fn subgoal_batch(
+    examples: &[&SubGoalExample],
+    labels: usize,
+    device: &Device,
+) -> (Tensor<2>, Tensor<2>) {
+    let mut x = Vec::new();
+    let mut y = Vec::new();
+    for e in examples {
+        subgoal_input(&mut x, e.feature, e.tool, e.label, e.index, labels);
+        y.extend((0..3).map(|j| e.target[j] - e.feature[j]));
+    }
+    let b = examples.len();
+    (
+        matrix(b, subgoal_width(labels), x, device),
+        matrix(b, 3, y, device),
+    )
+}
+
+/// Inputs [B, 6] (delta, joints) and targets (action / 5 degrees) [B, 3].
+pub fn action_batch(examples: &[&ActionExample], device: &Device) -> (Tensor<2>, Tensor<2>) {
+    let mut x = Vec::new();
+    let mut y = Vec::new();
+    for e in examples {
+        x.extend(e.delta);
+        x.extend(e.joints);
+        y.extend(e.action.map(|a| a / ACTION_SCALE));
+    }
+    let b = examples.len();
+    (matrix(b, 6, x, device), matrix(b, 3, y, device))
+}
