@@ -18,7 +18,11 @@ use serde_json::json;
 /// One planner's run of one scenario.
 #[derive(Debug, Clone)]
 struct Run {
-    complete: bool,
+    /// Every present selected product packed (missing ones reported as
+    /// waiting), nothing collided, no order broken.
+    success: bool,
+    /// Why not, when not.
+    failure: Option<String>,
     fallbacks: usize,
     violations: usize,
     timing: Timing,
@@ -28,8 +32,20 @@ struct Run {
 
 impl Run {
     fn of(r: &Report) -> Run {
+        let failed = r.products.iter().find_map(|p| match &p.outcome {
+            Outcome::Failed(why) => Some(format!("{}: {why}", p.product)),
+            Outcome::NotAttempted => Some(format!("{}: not attempted", p.product)),
+            _ => None,
+        });
+        let failure = r
+            .violations
+            .first()
+            .map(|v| format!("the reasoner {v}"))
+            .or(failed)
+            .or_else(|| r.collisions.first().cloned());
         Run {
-            complete: r.complete,
+            success: failure.is_none(),
+            failure,
             fallbacks: r.fallbacks,
             violations: r.violations.len(),
             timing: r.timing.clone(),
@@ -45,12 +61,14 @@ impl Run {
 
 #[derive(Debug, Clone, Default)]
 struct CaseResult {
+    name: String,
     /// Every reasoner decision right (learned only).
     reasoner: Option<bool>,
     runs: Vec<(&'static str, Run)>,
 }
 
 fn one_case(
+    name: &str,
     compiled: &packwright_compiler::Compiled,
     setup: &packwright_compiler::expand::Setup,
     nets: Option<&Networks>,
@@ -63,7 +81,10 @@ fn one_case(
     let Some(start) = execute::home(&ep.arm, cell) else {
         bail!("the arm cannot reach a start pose over the pending area");
     };
-    let mut result = CaseResult::default();
+    let mut result = CaseResult {
+        name: name.to_owned(),
+        ..CaseResult::default()
+    };
     if let Some(nets) = nets {
         let sim = Simulator::new(ep.arm.clone(), cell, &ep.placements, start)?;
         let seen = packwright_runtime::world::World::observe(&sim).products;
@@ -102,10 +123,10 @@ fn row(suite: &str, planner: &str, cases: &[CaseResult]) -> serde_json::Value {
         .flat_map(|c| c.runs.iter().filter(|(p, _)| *p == planner).map(|(_, r)| r))
         .collect();
     let n = runs.len();
-    let ok = runs.iter().filter(|r| r.complete).count();
+    let ok = runs.iter().filter(|r| r.success).count();
     let clean = runs
         .iter()
-        .filter(|r| r.complete && r.fallbacks == 0)
+        .filter(|r| r.success && r.fallbacks == 0)
         .count();
     let reasoner: Vec<bool> = cases.iter().filter_map(|c| c.reasoner).collect();
     let reasoner_ok = reasoner.iter().filter(|r| **r).count();
@@ -131,6 +152,7 @@ fn row(suite: &str, planner: &str, cases: &[CaseResult]) -> serde_json::Value {
         "decision_us": stat(&all(|t| &t.decision_us)),
         "subgoal_us": stat(&all(|t| &t.subgoal_us)),
         "network_us": stat(&all(|t| &t.network_us)),
+        "failures": cases.iter().flat_map(|c| c.runs.iter().filter(|(p, _)| *p == planner).filter_map(|(_, r)| r.failure.as_ref().map(|f| json!({"scenario": c.name, "why": f})))).collect::<Vec<_>>(),
         "execution_s_per_product": mean(&runs.iter().flat_map(|r| r.execution_s.iter().copied()).collect::<Vec<_>>()),
     })
 }
@@ -260,6 +282,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
                 || nets.clone(),
                 |nets, (i, case)| {
                     let r = one_case(
+                        &case.name,
                         &compiled,
                         &case.setup,
                         nets.as_ref(),

@@ -16,7 +16,8 @@ use crate::world::Seen;
 pub const MAX_POLICY_STEPS: usize = 30;
 /// A sub-goal where the suction switches (the cup on a product's top
 /// face, a release in a slot) is reached when the cup tip is this close (m).
-pub const REACHED: f64 = 0.002;
+pub const REACHED: f64 = 0.001;
+
 /// A via point (hover, lift, approach, above the slot) is reached when the
 /// cup tip is this close (m).
 pub const REACHED_VIA: f64 = 0.01;
@@ -205,6 +206,7 @@ impl<W: World> Runner<'_, W> {
         feature: [f64; 3],
         label: usize,
         suction: [Suction; 3],
+        contact: Option<f64>,
         held: Option<&Held>,
         ignore: Option<&str>,
         fallbacks: &mut usize,
@@ -215,7 +217,13 @@ impl<W: World> Runner<'_, W> {
             let start = self.world.observe().joints;
             let started = Instant::now();
             let goal = nets.subgoal(f32s(feature), f32s(self.tip(&start)), label, k);
-            let goal = goal.map(f64::from);
+            let mut goal = goal.map(f64::from);
+            // A guarded contact: the cup meets the top face where the
+            // product is sensed (its centre plus half its height), as a
+            // vacuum sensor would stop the descent; x and y stay learned.
+            if let (Suction::On, Some(top)) = (switch, contact) {
+                goal[2] = top;
+            }
             goals[k] = goal;
             let probe = Instant::now();
             let _ = nets.action([0.0; 3], [0.0; 3]);
@@ -453,7 +461,16 @@ fn learned_manipulate<W: World>(
     let (centre, _) =
         seen_centre(&obs, &name).ok_or_else(|| fail("the product disappeared".into()))?;
     runner
-        .learned_stage(nets, centre, 0, PICK_SUCTION, None, Some(&name), fallbacks)
+        .learned_stage(
+            nets,
+            centre,
+            0,
+            PICK_SUCTION,
+            Some(centre[2] + spec.size[2] / 2.0),
+            None,
+            Some(&name),
+            fallbacks,
+        )
         .map_err(fail)?;
     // Placing: the reasoner sees the held product raised.
     let obs = runner.world.observe();
@@ -500,6 +517,7 @@ fn learned_manipulate<W: World>(
             feature,
             choice.label,
             PLACE_SUCTION,
+            None,
             Some(&held),
             None,
             fallbacks,

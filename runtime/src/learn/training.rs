@@ -1,7 +1,7 @@
 //! Seeded training of the three networks: Adam, mini-batches, a held-out
 //! split, early stopping on its loss (the best epoch's weights are kept).
 
-use super::data::{TrainingSet, action_batch, graph_batch, subgoal_batch};
+use super::data::{NODE_FEATURES, TrainingSet, action_batch, graph_batch, subgoal_batch};
 use super::inference::Networks;
 use super::model::{DynamicsPolicy, ModelConfig, Reasoner, SubGoalPlanner};
 use burn::module::Module;
@@ -37,6 +37,11 @@ pub struct TrainConfig {
     pub action_batch: usize,
     /// Weight of the sub-goal planner's KL term.
     pub kl_weight: f64,
+    /// Standard deviation (m) of the noise added to the products'
+    /// positions while the reasoner trains (sensing noise, a held product
+    /// a little lower than demonstrated).
+    #[serde(default)]
+    pub position_noise: f64,
 }
 
 impl Default for TrainConfig {
@@ -52,6 +57,7 @@ impl Default for TrainConfig {
             subgoal_batch: 64,
             action_batch: 256,
             kl_weight: 1e-3,
+            position_noise: 0.0,
         }
     }
 }
@@ -286,6 +292,7 @@ pub fn train(
                 )
             });
             let mut rng = rng_for(0);
+            let position_noise = config.position_noise;
 
             let reasoner = {
                 let (train_idx, valid_idx) = split(set.graphs.len(), config.holdout, &mut rng);
@@ -300,7 +307,19 @@ pub fn train(
                     config,
                     &mut rng,
                     |m, chunk| {
-                        let b = graph_batch(&pick(chunk), labels, &device);
+                        let mut b = graph_batch(&pick(chunk), labels, &device);
+                        if position_noise > 0.0 {
+                            // Sensing noise on (x, y, z) of the present nodes.
+                            let dims = b.nodes.dims();
+                            let xyz = Tensor::<1>::from_floats([1.0, 1.0, 1.0, 0.0, 0.0], &device)
+                                .reshape([1, 1, NODE_FEATURES]);
+                            let noise = Tensor::random(
+                                dims,
+                                Distribution::Normal(0.0, position_noise),
+                                &device,
+                            );
+                            b.nodes = b.nodes + noise * xyz * b.mask.clone();
+                        }
                         let out = m.forward(&b);
                         reasoner_loss(out.scores, out.labels, b.target, b.label)
                     },
