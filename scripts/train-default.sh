@@ -8,4 +8,4 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 "$bin" compile orders/suites/teach.pack -o "$tmp/teach"
 "$bin" train "$tmp/teach" -o models/default --seed "${1:-0}" \
-  --demos teach_2of3 teach_3of3 teach_3of5 teach_4of5
+  --demos teach_2of3 teach_3of3 teach_3of5 teach_4of5 teach_3of5_far

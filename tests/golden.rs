@@ -351,20 +351,56 @@ fn execution_plans_of_the_example_orders() {
                     "{order} ({planner}): complete {}\n",
                     report["complete"]
                 ));
-                for p in report["products"].as_array().expect("products") {
-                    text.push_str(&format!(
-                        "  {} -> {}: {}, execution {:.2} s, error {:.1} mm\n",
-                        p["product"].as_str().unwrap_or("?"),
-                        p["slot"].as_str().unwrap_or("?"),
-                        p["outcome"].as_str().unwrap_or("?"),
-                        p["execution_s"].as_f64().unwrap_or(f64::NAN),
-                        p["error_m"].as_f64().unwrap_or(f64::NAN) * 1000.0,
-                    ));
-                }
+                text.push_str(&plan_rows(&report, 2, 1));
             }
         }
     }
     insta::assert_snapshot!("execution_plans", text);
+}
+
+/// The bundled model (models/default, trained on orders/) loads and packs
+/// the example orders of its cell with the learned planner, which
+/// `execute` picks by itself: the golden plan of each.
+#[test]
+fn the_default_model_packs_the_example_orders() {
+    let mut text = String::new();
+    for (file, order) in [
+        ("orders/customers/hampton_deli.pack", "deli_crate"),
+        ("orders/customers/pine_gifts.pack", "pine_trio"),
+        ("orders/customers/pine_gifts.pack", "pine_duo"),
+    ] {
+        let out = packwright(&["execute", file, "--order", order, "--json"]);
+        assert_eq!(out.status.code(), Some(0), "{order}:\n{}", text_of(&out));
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        assert_eq!(report["planner"], "learned", "the default planner");
+        text.push_str(&format!(
+            "{order} (learned): complete {}, fallbacks {}, violations {}\n",
+            report["complete"], report["fallbacks"], report["violations"]
+        ));
+        // Coarser: network outputs are f32 and may differ in the last bits
+        // between CPUs.
+        text.push_str(&plan_rows(&report, 1, 0));
+    }
+    insta::assert_snapshot!("default_model_plans", text);
+}
+
+/// One line per product of an `execute --json` report: outcome, simulated
+/// execution time and final error, rounded as asked.
+fn plan_rows(report: &serde_json::Value, time_digits: usize, error_digits: usize) -> String {
+    let mut text = String::new();
+    for p in report["products"].as_array().expect("products") {
+        text.push_str(&format!(
+            "  {} -> {}: {}, execution {:.t$} s, error {:.e$} mm\n",
+            p["product"].as_str().unwrap_or("?"),
+            p["slot"].as_str().unwrap_or("?"),
+            p["outcome"].as_str().unwrap_or("?"),
+            p["execution_s"].as_f64().unwrap_or(f64::NAN),
+            p["error_m"].as_f64().unwrap_or(f64::NAN) * 1000.0,
+            t = time_digits,
+            e = error_digits,
+        ));
+    }
+    text
 }
 
 fn text_of(out: &Output) -> String {

@@ -139,7 +139,7 @@ fn row(suite: &str, planner: &str, cases: &[CaseResult]) -> serde_json::Value {
     json!({
         "suite": suite,
         "planner": planner,
-        "scenarios": n,
+        "scenarios": n.max(if learned { reasoner.len() } else { 0 }),
         "reasoner_sr": (learned && !reasoner.is_empty()).then(|| reasoner_ok as f64 / reasoner.len() as f64),
         "reasoner_ci95": (learned && !reasoner.is_empty()).then(|| wilson(reasoner_ok, reasoner.len())),
         "reasoner_scenarios": if learned { reasoner.len() } else { 0 },

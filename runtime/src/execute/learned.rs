@@ -16,7 +16,7 @@ use crate::world::Seen;
 pub const MAX_POLICY_STEPS: usize = 30;
 /// A sub-goal where the suction switches (the cup on a product's top
 /// face, a release in a slot) is reached when the cup tip is this close (m).
-pub const REACHED: f64 = 0.001;
+pub const REACHED: f64 = 0.002;
 
 /// A via point (hover, lift, approach, above the slot) is reached when the
 /// cup tip is this close (m).
