@@ -1,22 +1,15 @@
 //! `packwright demonstrate`: record the expert's motion demonstrations.
 
 use crate::Exit;
-use crate::bridge::demonstration_episode;
 use crate::cli::DemonstrateArgs;
 use crate::fsio::write_file_atomically;
-use anyhow::{Context, bail};
+use crate::learning::{read_json, replay_all};
+use anyhow::bail;
 use packwright_compiler::artifact::{Manifest, WorldFile};
-use packwright_runtime::execute::{self, PlannerKind};
 use packwright_runtime::record::MotionLog;
-use packwright_runtime::sim::Simulator;
 use safetensors::tensor::{Dtype, TensorView};
 use std::collections::HashMap;
-
-fn read<T: serde::de::DeserializeOwned>(path: &std::path::Path) -> anyhow::Result<T> {
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-    serde_json::from_slice(&bytes)
-        .with_context(|| format!("{} is not a packwright artifact", path.display()))
-}
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 fn f32s(rows: impl Iterator<Item = [f64; 3]>) -> Vec<u8> {
     rows.flat_map(|r| r.map(|v| v as f32))
@@ -112,8 +105,8 @@ fn tensors(log: &MotionLog, demo_of: &[i64]) -> anyhow::Result<Vec<u8>> {
 }
 
 pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
-    let manifest: Manifest = read(&args.dir.join("manifest.json"))?;
-    let world: WorldFile = read(&args.dir.join("orders.json"))?;
+    let manifest: Manifest = read_json(&args.dir.join("manifest.json"))?;
+    let world: WorldFile = read_json(&args.dir.join("orders.json"))?;
     if manifest.demonstrations.is_empty() {
         bail!(
             "{} holds no demonstrations: compile files with `demo` or `demos` blocks",
@@ -121,39 +114,32 @@ pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
         );
     }
     let total = manifest.demonstrations.len();
+    let done = AtomicUsize::new(0);
+    let demos: Vec<_> = manifest.demonstrations.iter().collect();
+    let logs = replay_all(&world, &demos, &|| {
+        let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+        if !args.json && (n.is_multiple_of(10) || n == total) {
+            err!("\rrecorded {n}/{total} demonstrations");
+        }
+    })?;
+    if !args.json {
+        errln!();
+    }
     let mut log = MotionLog::default();
     let mut demo_of: Vec<i64> = Vec::new();
     let mut failed = Vec::new();
-    for (i, demo) in manifest.demonstrations.iter().enumerate() {
-        let ep = demonstration_episode(&world, demo)?;
-        let start = execute::home(&ep.arm, &ep.task.cell)
-            .context("the arm cannot reach a start pose over the pending area")?;
-        let mut sim = Simulator::new(ep.arm.clone(), &ep.task.cell, &ep.placements, start)?;
-        let mut one = MotionLog::default();
-        let report = execute::run_recorded(
-            &mut sim,
-            &ep.arm,
-            &ep.task,
-            PlannerKind::Expert,
-            Some(&mut one),
-        );
-        if report.complete {
-            let offset = log.subgoals.len();
-            demo_of.extend(std::iter::repeat_n(i as i64, one.subgoals.len()));
-            log.subgoals.extend(one.subgoals);
-            log.actions.extend(one.actions.into_iter().map(|mut a| {
-                a.subgoal += offset;
-                a
-            }));
-        } else {
+    for (i, one) in logs.into_iter().enumerate() {
+        let Some(one) = one else {
             failed.push(i);
-        }
-        if !args.json && ((i + 1) % 10 == 0 || i + 1 == total) {
-            err!("\rrecorded {}/{total} demonstrations", i + 1);
-        }
-    }
-    if !args.json {
-        errln!();
+            continue;
+        };
+        let offset = log.subgoals.len();
+        demo_of.extend(std::iter::repeat_n(i as i64, one.subgoals.len()));
+        log.subgoals.extend(one.subgoals);
+        log.actions.extend(one.actions.into_iter().map(|mut a| {
+            a.subgoal += offset;
+            a
+        }));
     }
     write_file_atomically(&args.output, &tensors(&log, &demo_of)?)?;
     if args.json {

@@ -342,7 +342,8 @@ pub fn run_learned<W: World>(
     let mut stop = None;
     for _ in 0..task.assignment.len() {
         let obs = runner.world.observe();
-        if expected_next_any(task, &obs.products).is_none() {
+        // Done when no selected, present product is out of its slot.
+        if expected_next(task, &obs.products).is_none() {
             break;
         }
         match learned_product(&mut runner, nets, &mut fallbacks, &mut products) {
@@ -370,11 +371,6 @@ pub fn run_learned<W: World>(
     report.violations = violations;
     report.complete &= report.violations.is_empty();
     report
-}
-
-/// Any selected, present product not yet in its slot.
-fn expected_next_any(task: &OrderTask, seen: &[Seen]) -> Option<usize> {
-    expected_next(task, seen)
 }
 
 /// One product: decide, pick, decide, place, back off.
