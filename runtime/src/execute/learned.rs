@@ -163,6 +163,8 @@ impl<W: World> Runner<'_, W> {
     /// [`MAX_POLICY_STEPS`] or the motion would collide. The steps'
     /// end point is joined straight when that is free, else through every
     /// step.
+    /// `first_action_us` gets the time of the first policy call.
+    #[allow(clippy::too_many_arguments)]
     fn rollout(
         &mut self,
         nets: &Networks,
@@ -171,6 +173,7 @@ impl<W: World> Runner<'_, W> {
         tolerance: f64,
         held: Option<&Held>,
         ignore: Option<&str>,
+        first_action_us: &mut Option<f64>,
     ) -> Option<Vec<Joints>> {
         let mut q = start;
         let mut steps = Vec::new();
@@ -185,7 +188,9 @@ impl<W: World> Runner<'_, W> {
             if steps.len() == MAX_POLICY_STEPS {
                 break;
             }
+            let called = Instant::now();
             let action = nets.action(f32s(delta), [q[0] as f32, q[1] as f32, q[2] as f32]);
+            first_action_us.get_or_insert(called.elapsed().as_secs_f64() * 1e6);
             let step = record::clip(action.map(f64::from));
             q = cup_down(self.arm, &self.base, &q, step)?;
             steps.push(q);
@@ -225,12 +230,7 @@ impl<W: World> Runner<'_, W> {
                 goal[2] = top;
             }
             goals[k] = goal;
-            let probe = Instant::now();
-            let _ = nets.action([0.0; 3], [0.0; 3]);
-            let action_us = probe.elapsed().as_secs_f64() * 1e6;
-            self.timing
-                .network_us
-                .push((probe - started).as_secs_f64() * 1e6 + action_us);
+            let subgoal_us = started.elapsed().as_secs_f64() * 1e6;
             // A release the wrist cannot reach is raised, as the expert's
             // is, up to the previous sub-goal's height.
             let ceiling = if switch == Suction::Off && k > 0 {
@@ -246,10 +246,25 @@ impl<W: World> Runner<'_, W> {
                 } else {
                     REACHED
                 };
-                (0..)
+                let mut first_action_us = None;
+                let planned = (0..)
                     .map(|i| [goal[0], goal[1], goal[2] + RAISE_STEP * f64::from(i)])
                     .take_while(|g| g[2] <= ceiling.max(goal[2]))
-                    .find_map(|g| self.rollout(nets, start, g, tolerance, held, ignore))
+                    .find_map(|g| {
+                        self.rollout(
+                            nets,
+                            start,
+                            g,
+                            tolerance,
+                            held,
+                            ignore,
+                            &mut first_action_us,
+                        )
+                    });
+                if let Some(action_us) = first_action_us {
+                    self.timing.network_us.push(subgoal_us + action_us);
+                }
+                planned
             };
             let samples = match planned {
                 Some(samples) => samples,
@@ -303,20 +318,8 @@ pub fn run_learned<W: World>(
     nets: &Networks,
     seed: u64,
 ) -> Report {
-    let base = Isometry3::translation(task.cell.base[0], task.cell.base[1], task.cell.base[2]);
-    let mut runner = Runner {
-        checker: Checker::new(arm, &task.cell),
-        world,
-        arm,
-        task,
-        planner: PlannerKind::Rrt { seed },
-        base,
-        planning_s: 0.0,
-        execution_steps: 0,
-        log: None,
-        timing: Timing::default(),
-        ceiling: None,
-    };
+    // The planner is RRT-Connect: it serves the fallbacks.
+    let mut runner = Runner::new(world, arm, task, PlannerKind::Rrt { seed }, None);
     let first = runner.world.observe();
     let mut products: Vec<ProductReport> = task
         .assignment

@@ -115,8 +115,8 @@ pub struct Timing {
     pub decision_us: Vec<f64>,
     /// Per sub-goal: finding it and planning the motion to it.
     pub subgoal_us: Vec<f64>,
-    /// Learned planner only: one sub-goal planner call plus one dynamics
-    /// policy call.
+    /// Learned planner only: one sub-goal planner call plus the first
+    /// dynamics policy call of its rollout (sub-goals with a rollout).
     pub network_us: Vec<f64>,
 }
 
@@ -175,7 +175,30 @@ struct StageInfo {
     label: u32,
 }
 
-impl<W: World> Runner<'_, W> {
+impl<'a, W: World> Runner<'a, W> {
+    fn new(
+        world: &'a mut W,
+        arm: &'a Arm,
+        task: &'a OrderTask,
+        planner: PlannerKind,
+        log: Option<&'a mut MotionLog>,
+    ) -> Runner<'a, W> {
+        let [x, y, z] = task.cell.base;
+        Runner {
+            checker: Checker::new(arm, &task.cell),
+            world,
+            arm,
+            task,
+            planner,
+            base: Isometry3::translation(x, y, z),
+            planning_s: 0.0,
+            execution_steps: 0,
+            log,
+            timing: Timing::default(),
+            ceiling: None,
+        }
+    }
+
     fn sync_products(&mut self, obs: &Observation) {
         let bodies: Vec<ProductBody> = obs
             .products
@@ -531,20 +554,7 @@ pub fn run_recorded<W: World>(
     planner: PlannerKind,
     log: Option<&mut MotionLog>,
 ) -> Report {
-    let base = Isometry3::translation(task.cell.base[0], task.cell.base[1], task.cell.base[2]);
-    let mut runner = Runner {
-        checker: Checker::new(arm, &task.cell),
-        world,
-        arm,
-        task,
-        planner,
-        base,
-        planning_s: 0.0,
-        execution_steps: 0,
-        log,
-        timing: Timing::default(),
-        ceiling: None,
-    };
+    let mut runner = Runner::new(world, arm, task, planner, log);
     let period = runner.world.control_period();
     let mut products = Vec::new();
     let mut stopped = false;
