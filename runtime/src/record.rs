@@ -29,6 +29,10 @@ pub struct SubGoalSample {
     pub index: u8,
     /// The tool tip the expert reached.
     pub target: [f64; 3],
+    /// The arm's joints when the sub-goal is issued.
+    pub start: [f64; 6],
+    /// The joints the expert reached it with.
+    pub goal: [f64; 6],
 }
 
 #[derive(Debug, Clone, PartialEq)]

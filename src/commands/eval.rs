@@ -23,7 +23,8 @@ struct Run {
     success: bool,
     /// Why not, when not.
     failure: Option<String>,
-    fallbacks: usize,
+    /// Stages handed to RRT-Connect, by kind ("placing 3: short").
+    fallbacks: Vec<String>,
     violations: usize,
     timing: Timing,
     /// Simulated seconds per product the robot packed.
@@ -46,7 +47,7 @@ impl Run {
         Run {
             success: failure.is_none(),
             failure,
-            fallbacks: r.fallbacks,
+            fallbacks: r.fallbacks.iter().map(|f| f.kind()).collect(),
             violations: r.violations.len(),
             timing: r.timing.clone(),
             execution_s: r
@@ -126,7 +127,7 @@ fn row(suite: &str, planner: &str, cases: &[CaseResult]) -> serde_json::Value {
     let ok = runs.iter().filter(|r| r.success).count();
     let clean = runs
         .iter()
-        .filter(|r| r.success && r.fallbacks == 0)
+        .filter(|r| r.success && r.fallbacks.is_empty())
         .count();
     let reasoner: Vec<bool> = cases.iter().filter_map(|c| c.reasoner).collect();
     let reasoner_ok = reasoner.iter().filter(|r| **r).count();
@@ -136,6 +137,10 @@ fn row(suite: &str, planner: &str, cases: &[CaseResult]) -> serde_json::Value {
             .collect()
     };
     let learned = planner == "learned";
+    let mut kinds = std::collections::BTreeMap::<&str, usize>::new();
+    for kind in runs.iter().flat_map(|r| r.fallbacks.iter()) {
+        *kinds.entry(kind).or_default() += 1;
+    }
     json!({
         "suite": suite,
         "planner": planner,
@@ -147,7 +152,8 @@ fn row(suite: &str, planner: &str, cases: &[CaseResult]) -> serde_json::Value {
         "sr_ci95": (n > 0).then(|| wilson(ok, n)),
         "sr_no_fallback": (learned && n > 0).then(|| clean as f64 / n as f64),
         "sr_no_fallback_ci95": (learned && n > 0).then(|| wilson(clean, n)),
-        "fallbacks_per_package": (learned && n > 0).then(|| runs.iter().map(|r| r.fallbacks).sum::<usize>() as f64 / n as f64),
+        "fallbacks_per_package": (learned && n > 0).then(|| runs.iter().map(|r| r.fallbacks.len()).sum::<usize>() as f64 / n as f64),
+        "fallback_kinds": kinds,
         "violations": runs.iter().map(|r| r.violations).sum::<usize>(),
         "decision_us": stat(&all(|t| &t.decision_us)),
         "subgoal_us": stat(&all(|t| &t.subgoal_us)),

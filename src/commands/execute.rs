@@ -29,7 +29,7 @@ pub fn to_json(name: &str, r: &Report) -> serde_json::Value {
         "complete": r.complete,
         "simulated_s": r.time_s,
         "collisions": r.collisions,
-        "fallbacks": r.fallbacks,
+        "fallbacks": r.fallbacks.iter().map(ToString::to_string).collect::<Vec<_>>(),
         "violations": r.violations,
         "products": r.products.iter().map(|p| serde_json::json!({
             "product": p.product,
@@ -168,8 +168,8 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
         if report.planner == "learned" {
             outln!(
                 "learned planner: {} fallback{} to RRT-Connect, {} violation{}",
-                report.fallbacks,
-                if report.fallbacks == 1 { "" } else { "s" },
+                report.fallbacks.len(),
+                if report.fallbacks.len() == 1 { "" } else { "s" },
                 report.violations.len(),
                 if report.violations.len() == 1 {
                     ""
@@ -177,6 +177,9 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
                     "s"
                 },
             );
+            for f in &report.fallbacks {
+                outln!("  fallback: {f}");
+            }
             for v in &report.violations {
                 outln!("  the reasoner {v}: the arm stopped");
             }

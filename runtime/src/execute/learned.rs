@@ -22,6 +22,67 @@ pub const REACHED: f64 = 0.002;
 /// cup tip is this close (m).
 pub const REACHED_VIA: f64 = 0.01;
 
+/// Why a dynamics-policy rollout did not give a motion.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Shortfall {
+    /// [`MAX_POLICY_STEPS`] steps ended this far (m) from the sub-goal.
+    Short(f64),
+    /// A step would leave the joint limits (or the wrist could not keep
+    /// the cup down).
+    Limits,
+    /// The motion would collide.
+    Collides(String),
+}
+
+/// A stage handed to RRT-Connect: where and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fallback {
+    /// The product handled.
+    pub product: String,
+    /// `true` placing, `false` picking.
+    pub placing: bool,
+    /// The stage's sub-goal (0, 1, 2) whose rollout fell short.
+    pub subgoal: usize,
+    pub why: Shortfall,
+}
+
+impl Fallback {
+    /// A short key for counting fallbacks by kind, e.g. "placing 3: short".
+    pub fn kind(&self) -> String {
+        format!(
+            "{} {}: {}",
+            if self.placing { "placing" } else { "picking" },
+            self.subgoal + 1,
+            match self.why {
+                Shortfall::Short(_) => "short",
+                Shortfall::Limits => "joint limits",
+                Shortfall::Collides(_) => "would collide",
+            }
+        )
+    }
+}
+
+impl std::fmt::Display for Fallback {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} {}, sub-goal {}: ",
+            if self.placing { "placing" } else { "picking" },
+            self.product,
+            self.subgoal + 1
+        )?;
+        match &self.why {
+            Shortfall::Short(d) => write!(
+                f,
+                "{MAX_POLICY_STEPS} policy steps ended {:.1} mm away",
+                d * 1e3
+            ),
+            Shortfall::Limits => write!(f, "a policy step would leave the joint limits"),
+            Shortfall::Collides(why) => write!(f, "the policy's motion would collide ({why})"),
+        }
+    }
+}
+
 /// The suction switch at each of a stage's sub-goals.
 const PICK_SUCTION: [Suction; 3] = [Suction::Keep, Suction::On, Suction::Keep];
 const PLACE_SUCTION: [Suction; 3] = [Suction::Keep, Suction::Keep, Suction::Off];
@@ -159,10 +220,9 @@ impl<W: World> Runner<'_, W> {
     }
 
     /// The dynamics policy's motion from `start` to `goal`: the checked
-    /// commands, or `None` if it does not get there in
-    /// [`MAX_POLICY_STEPS`] or the motion would collide. The steps'
-    /// end point is joined straight when that is free, else through every
-    /// step.
+    /// commands, or why not (not there in [`MAX_POLICY_STEPS`], a step
+    /// out of the joint limits, a collision). The steps' end point is
+    /// joined straight when that is free, else through every step.
     /// `first_action_us` gets the time of the first policy call.
     #[allow(clippy::too_many_arguments)]
     fn rollout(
@@ -174,33 +234,32 @@ impl<W: World> Runner<'_, W> {
         held: Option<&Held>,
         ignore: Option<&str>,
         first_action_us: &mut Option<f64>,
-    ) -> Option<Vec<Joints>> {
+    ) -> Result<Vec<Joints>, Shortfall> {
         let mut q = start;
         let mut steps = Vec::new();
-        let mut reached = false;
-        for _ in 0..=MAX_POLICY_STEPS {
+        loop {
             let tip = self.tip(&q);
             let delta: [f64; 3] = std::array::from_fn(|j| goal[j] - tip[j]);
-            if delta.iter().map(|d| d * d).sum::<f64>().sqrt() <= tolerance {
-                reached = true;
+            let away = delta.iter().map(|d| d * d).sum::<f64>().sqrt();
+            if away <= tolerance {
                 break;
             }
             if steps.len() == MAX_POLICY_STEPS {
-                break;
+                return Err(Shortfall::Short(away));
             }
             let called = Instant::now();
             let action = nets.action(f32s(delta), [q[0] as f32, q[1] as f32, q[2] as f32]);
             first_action_us.get_or_insert(called.elapsed().as_secs_f64() * 1e6);
             let step = record::clip(action.map(f64::from));
-            q = cup_down(self.arm, &self.base, &q, step)?;
+            q = cup_down(self.arm, &self.base, &q, step).ok_or(Shortfall::Limits)?;
             steps.push(q);
         }
-        if !reached || steps.is_empty() {
-            return (reached && steps.is_empty()).then(Vec::new);
+        if steps.is_empty() {
+            return Ok(Vec::new());
         }
         checked_samples(self.arm, &self.checker, start, &[q], held, ignore)
             .or_else(|_| checked_samples(self.arm, &self.checker, start, &steps, held, ignore))
-            .ok()
+            .map_err(Shortfall::Collides)
     }
 
     /// One stage with learned sub-goals and motions.
@@ -208,13 +267,14 @@ impl<W: World> Runner<'_, W> {
     fn learned_stage(
         &mut self,
         nets: &Networks,
+        product: &str,
         feature: [f64; 3],
         label: usize,
         suction: [Suction; 3],
         contact: Option<f64>,
         held: Option<&Held>,
         ignore: Option<&str>,
-        fallbacks: &mut usize,
+        fallbacks: &mut Vec<Fallback>,
     ) -> Result<[[f64; 3]; 3], Failure> {
         let mut fallen = false;
         let mut goals = [[0.0; 3]; 3];
@@ -238,41 +298,53 @@ impl<W: World> Runner<'_, W> {
             } else {
                 goal[2]
             };
-            let planned = if fallen {
-                None
-            } else {
+            // `None`: the stage already fell back.
+            let planned = (!fallen).then(|| {
                 let tolerance = if switch == Suction::Keep {
                     REACHED_VIA
                 } else {
                     REACHED
                 };
                 let mut first_action_us = None;
-                let planned = (0..)
-                    .map(|i| [goal[0], goal[1], goal[2] + RAISE_STEP * f64::from(i)])
-                    .take_while(|g| g[2] <= ceiling.max(goal[2]))
-                    .find_map(|g| {
-                        self.rollout(
-                            nets,
-                            start,
-                            g,
-                            tolerance,
-                            held,
-                            ignore,
-                            &mut first_action_us,
-                        )
-                    });
+                let mut rollout = |g: [f64; 3]| {
+                    self.rollout(
+                        nets,
+                        start,
+                        g,
+                        tolerance,
+                        held,
+                        ignore,
+                        &mut first_action_us,
+                    )
+                };
+                // The first attempt's shortfall is the one reported.
+                let mut planned = rollout(goal);
+                let mut raised = 1;
+                while planned.is_err() && goal[2] + RAISE_STEP * f64::from(raised) <= ceiling {
+                    if let Ok(samples) =
+                        rollout([goal[0], goal[1], goal[2] + RAISE_STEP * f64::from(raised)])
+                    {
+                        planned = Ok(samples);
+                    }
+                    raised += 1;
+                }
                 if let Some(action_us) = first_action_us {
                     self.timing.network_us.push(subgoal_us + action_us);
                 }
                 planned
-            };
+            });
             let samples = match planned {
-                Some(samples) => samples,
-                None => {
-                    if !fallen {
-                        *fallbacks += 1;
-                        fallen = true;
+                Some(Ok(samples)) => samples,
+                other => {
+                    if let Some(Err(why)) = other {
+                        fallbacks.push(Fallback {
+                            product: product.to_string(),
+                            placing: held.is_some(),
+                            subgoal: k,
+                            why,
+                        });
                     }
+                    fallen = true;
                     let target = [SubGoal {
                         tip: goal,
                         suction: switch,
@@ -341,7 +413,7 @@ pub fn run_learned<W: World>(
             }
         })
         .collect();
-    let mut fallbacks = 0;
+    let mut fallbacks = Vec::new();
     let mut stop = None;
     for _ in 0..task.assignment.len() {
         let obs = runner.world.observe();
@@ -380,7 +452,7 @@ pub fn run_learned<W: World>(
 fn learned_product<W: World>(
     runner: &mut Runner<'_, W>,
     nets: &Networks,
-    fallbacks: &mut usize,
+    fallbacks: &mut Vec<Fallback>,
     products: &mut [ProductReport],
 ) -> Result<(), Stop> {
     let task = runner.task;
@@ -449,7 +521,7 @@ fn learned_manipulate<W: World>(
     nets: &Networks,
     p: usize,
     s: usize,
-    fallbacks: &mut usize,
+    fallbacks: &mut Vec<Fallback>,
 ) -> Result<(), Stop> {
     let task = runner.task;
     let spec = &task.products[p];
@@ -462,6 +534,7 @@ fn learned_manipulate<W: World>(
     runner
         .learned_stage(
             nets,
+            &name,
             centre,
             0,
             PICK_SUCTION,
@@ -513,6 +586,7 @@ fn learned_manipulate<W: World>(
     let goals = runner
         .learned_stage(
             nets,
+            &name,
             feature,
             choice.label,
             PLACE_SUCTION,

@@ -29,7 +29,8 @@ use std::time::Instant;
 
 mod learned;
 pub use learned::{
-    MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, expected_next, reasoner_trial, run_learned,
+    Fallback, MAX_POLICY_STEPS, REACHED, REACHED_VIA, Shortfall, cup_down, expected_next,
+    reasoner_trial, run_learned,
 };
 
 /// A product is packed when its centre is this close to its slot goal.
@@ -129,8 +130,8 @@ pub struct Report {
     /// Contacts the world reported, as "a / b".
     pub collisions: Vec<String>,
     pub time_s: f64,
-    /// Learned planner: stages handed to RRT-Connect.
-    pub fallbacks: usize,
+    /// Learned planner: stages handed to RRT-Connect, and why.
+    pub fallbacks: Vec<Fallback>,
     /// Learned planner: decisions that broke the order (a product it does
     /// not select, one already packed, a wrong slot); the arm stopped.
     pub violations: Vec<String>,
@@ -326,6 +327,8 @@ impl<'a, W: World> Runner<'a, W> {
             stage: info.stage,
             index: k as u8,
             target,
+            start: *start,
+            goal: *goal,
         });
         let subgoal = log.subgoals.len() - 1;
         let along: Vec<Joints> = std::iter::once(*start)
@@ -644,7 +647,7 @@ fn finish<W: World>(
         complete,
         collisions,
         time_s: last.time,
-        fallbacks: 0,
+        fallbacks: Vec::new(),
         violations: Vec::new(),
         timing: std::mem::take(&mut runner.timing),
     }
