@@ -194,6 +194,12 @@ pub struct TrainArgs {
     /// usually ends sooner).
     #[arg(long, value_name = "N")]
     pub epochs: Option<usize>,
+    /// DAgger rounds for the dynamics policy (default 2; 0 learns from the
+    /// demonstrations alone): the policy is rolled out from every
+    /// demonstrated sub-goal start, the expert labels the states it
+    /// visits, and it trains again on everything so far.
+    #[arg(long, value_name = "N")]
+    pub dagger_rounds: Option<usize>,
     /// No progress bars.
     #[arg(long)]
     pub quiet: bool,

@@ -437,6 +437,8 @@ fn demonstrate_writes_motion_demonstrations() {
     let shape = |n: &str| st.tensor(n).expect(n).shape().to_vec();
     assert_eq!(shape("subgoal_feature"), [30, 3]);
     assert_eq!(shape("subgoal_label"), [30]);
+    assert_eq!(shape("subgoal_start_joints"), [30, 6]);
+    assert_eq!(shape("subgoal_goal_joints"), [30, 6]);
     assert_eq!(shape("action_delta"), [600, 3]);
     let joints = st.tensor("action_joints").expect("action_joints");
     let limit = 5f32.to_radians() + 1e-6;

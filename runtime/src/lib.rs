@@ -11,6 +11,7 @@ pub mod execute;
 pub mod expert;
 pub mod learn;
 pub mod record;
+pub mod relabel;
 pub mod robot;
 pub mod rrt;
 pub mod scene;

@@ -11,7 +11,7 @@ use safetensors::tensor::{Dtype, TensorView};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-fn f32s(rows: impl Iterator<Item = [f64; 3]>) -> Vec<u8> {
+fn f32s<const N: usize>(rows: impl Iterator<Item = [f64; N]>) -> Vec<u8> {
     rows.flat_map(|r| r.map(|v| v as f32))
         .flat_map(f32::to_le_bytes)
         .collect()
@@ -60,6 +60,18 @@ fn tensors(log: &MotionLog, demo_of: &[i64]) -> anyhow::Result<Vec<u8>> {
             Dtype::U8,
             vec![n],
             s.iter().map(|x| x.index).collect(),
+        ),
+        (
+            "subgoal_start_joints",
+            Dtype::F32,
+            vec![n, 6],
+            f32s(s.iter().map(|x| x.start)),
+        ),
+        (
+            "subgoal_goal_joints",
+            Dtype::F32,
+            vec![n, 6],
+            f32s(s.iter().map(|x| x.goal)),
         ),
         (
             "subgoal_demo",

@@ -1,6 +1,7 @@
 //! `packwright train`: learn the three networks from compiled demonstrations.
 
 use crate::Exit;
+use crate::bridge::demonstration_episode;
 use crate::cli::TrainArgs;
 use crate::fsio::write_dir_atomically;
 use crate::learning::{graph_examples, motion_examples, read_json, replay_all};
@@ -9,6 +10,7 @@ use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use packwright_compiler::artifact::{LabelsFile, Manifest, WorldFile};
 use packwright_compiler::emit::Artifact;
 use packwright_runtime::learn::{self, Progress, Task, TrainConfig, TrainingSet};
+use packwright_runtime::relabel::ExpertCoach;
 use std::collections::BTreeSet;
 use std::time::Instant;
 
@@ -131,37 +133,57 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
     };
     if let Some(e) = args.epochs {
         config.epochs = e.max(1);
+        config.dagger_epochs = config.dagger_epochs.min(config.epochs);
     }
+    if let Some(r) = args.dagger_rounds {
+        config.dagger_rounds = r;
+    }
+    // DAgger's expert: the policy's rollouts from the demonstrated starts,
+    // on this cell's arm.
+    let ep = demonstration_episode(&world, chosen[0])?;
+    let replayed: Vec<_> = logs.iter().flatten().collect();
+    let coach = ExpertCoach::new(&ep.arm, ep.task.cell.base, ep.task.cell.suction, &replayed);
     let bars = MultiProgress::with_draw_target(if args.quiet {
         ProgressDrawTarget::hidden()
     } else {
         ProgressDrawTarget::stderr()
     });
     let template = "{prefix:>9} [{bar:30}] {pos}/{len} {msg}";
-    let named: Vec<(&str, ProgressBar)> = ["reasoner", "sub-goal", "dynamics"]
-        .into_iter()
-        .map(|name| {
-            let b = bars.add(bar(config.epochs as u64, args.quiet, template));
-            b.set_prefix(name);
-            (name, b)
-        })
-        .collect();
+    // The dynamics bar runs on through the DAgger rounds.
+    let dagger_len = config.dagger_rounds * config.dagger_epochs;
+    let named: Vec<(&str, ProgressBar)> =
+        [("reasoner", 0), ("sub-goal", 0), ("dynamics", dagger_len)]
+            .into_iter()
+            .map(|(name, extra)| {
+                let b = bars.add(bar((config.epochs + extra) as u64, args.quiet, template));
+                b.set_prefix(name);
+                (name, b)
+            })
+            .collect();
     let progress = |p: Progress| {
         let Some((_, b)) = named.iter().find(|(n, _)| *n == p.network) else {
             return;
         };
-        b.set_position(p.epoch as u64);
+        let before = match p.round {
+            0 => 0,
+            r => config.epochs + (r - 1) * config.dagger_epochs,
+        };
+        b.set_position((before + p.epoch) as u64);
         let metric = match p.network {
             "reasoner" => format!("accuracy {:.3}", p.valid_metric),
             "sub-goal" => format!("error {:.1} mm", p.valid_metric * 1000.0),
             _ => format!("error {:.3} deg", p.valid_metric),
         };
+        let round = match p.round {
+            0 => String::new(),
+            r => format!("DAgger round {r}: "),
+        };
         b.set_message(format!(
-            "loss {:.4} / held-out {:.4}, {metric}",
+            "{round}loss {:.4} / held-out {:.4}, {metric}",
             p.train_loss, p.valid_loss
         ));
     };
-    let (mut networks, metrics) = learn::train(&set, &config, &progress)?;
+    let (mut networks, metrics) = learn::train(&set, &config, Some(&coach), &progress)?;
     for (_, b) in &named {
         b.finish();
     }
@@ -187,6 +209,7 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
         "reasoner": metrics.reasoner,
         "subgoal": metrics.subgoal,
         "dynamics": metrics.dynamics,
+        "dagger": metrics.dagger,
     });
     let mut artifacts: Vec<Artifact> = networks
         .to_files()?
@@ -225,10 +248,28 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
         outln!(
             "  dynamics policy: held-out mean error {:.3} deg ({} samples, best epoch {}/{})",
             metrics.dynamics.valid_metric,
-            set.actions.len(),
+            metrics.dynamics.train_samples + metrics.dynamics.valid_samples,
             metrics.dynamics.best_epoch,
             metrics.dynamics.epochs_run
         );
+        for r in &metrics.dagger {
+            outln!(
+                "  {}: the policy reaches {}/{} demonstrated sub-goals in {} steps{}",
+                if r.round == 0 {
+                    "before DAgger".to_string()
+                } else {
+                    format!("after DAgger round {}", r.round)
+                },
+                r.reached,
+                r.rollouts,
+                packwright_runtime::execute::MAX_POLICY_STEPS,
+                if r.added > 0 {
+                    format!(" ({} states labelled and added)", r.added)
+                } else {
+                    String::new()
+                }
+            );
+        }
     }
     Ok(if failed.is_empty() {
         Exit::Success

@@ -1,7 +1,8 @@
 //! A trained model: the three networks on the CPU, called with plain
 //! numbers; saved as `config.json` and three safetensors files.
 
-use super::data::{ACTION_SCALE, graph_inputs, matrix, subgoal_input, subgoal_width};
+use super::data::{ACTION_SCALE, graph_inputs, subgoal_input, subgoal_width};
+use super::forward::{DynamicsWeights, ReasonerWeights, SubGoalWeights};
 use super::model::{DynamicsPolicy, ModelConfig, Reasoner, SubGoalPlanner};
 use super::training::TrainConfig;
 use crate::error::RuntimeError;
@@ -56,7 +57,15 @@ pub struct Networks {
     reasoner: Reasoner,
     subgoal: SubGoalPlanner,
     dynamics: DynamicsPolicy,
-    device: Device,
+    /// The same weights as plain matrices: what run-time calls use.
+    plain: Plain,
+}
+
+#[derive(Debug, Clone)]
+struct Plain {
+    reasoner: ReasonerWeights,
+    subgoal: SubGoalWeights,
+    dynamics: DynamicsWeights,
 }
 
 fn model_error(what: &str, e: impl std::fmt::Display) -> RuntimeError {
@@ -92,16 +101,24 @@ impl Networks {
         reasoner: Reasoner,
         subgoal: SubGoalPlanner,
         dynamics: DynamicsPolicy,
-    ) -> Networks {
-        Networks {
+    ) -> Result<Networks, RuntimeError> {
+        let plain = (|| {
+            Some(Plain {
+                reasoner: reasoner.weights()?,
+                subgoal: subgoal.weights()?,
+                dynamics: dynamics.weights()?,
+            })
+        })()
+        .ok_or_else(|| RuntimeError::Model("cannot read the weights' values".into()))?;
+        Ok(Networks {
             config,
             training,
             task: Task::default(),
             reasoner,
             subgoal,
             dynamics,
-            device: Device::flex(),
-        }
+            plain,
+        })
     }
 
     /// The model directory's files, in the order of [`FILES`].
@@ -138,11 +155,25 @@ impl Networks {
             )));
         }
         let c = &saved.model;
-        if c.labels == 0 || c.graph_layers == 0 || c.labels > 4096 || c.graph_hidden > 4096 {
+        let widths = [
+            c.labels,
+            c.graph_hidden,
+            c.classifier_hidden,
+            c.subgoal_hidden,
+            c.subgoal_latent,
+            c.dynamics_hidden,
+        ];
+        if widths.iter().any(|&w| w == 0 || w > 4096) || !(1..=64).contains(&c.graph_layers) {
             return Err(RuntimeError::Model(
                 "config.json describes an impossible architecture".into(),
             ));
         }
+        // Building the modules draws their (then replaced) initial weights
+        // from the process-wide device stream: not while a seeded training
+        // runs.
+        let _turn = super::training::SEEDED_DEVICE
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         let device = Device::flex();
         let mut r = Reasoner::new(c, &device);
         let mut s = SubGoalPlanner::new(c, &device);
@@ -150,7 +181,7 @@ impl Networks {
         load(&mut r, "reasoner.safetensors", reasoner)?;
         load(&mut s, "subgoal.safetensors", subgoal)?;
         load(&mut d, "dynamics.safetensors", dynamics)?;
-        let mut n = Networks::from_modules(saved.model, saved.training, r, s, d);
+        let mut n = Networks::from_modules(saved.model, saved.training, r, s, d)?;
         n.task = saved.task;
         Ok(n)
     }
@@ -163,28 +194,11 @@ impl Networks {
         nodes: &[[f32; 4]],
         goal_of: impl FnOnce(Option<usize>) -> [f32; 3],
     ) -> Choice {
-        let (n, adjacency, mask, score_mask) =
-            graph_inputs(std::iter::once(nodes)).tensors(&self.device);
-        let scores = self.reasoner.scores(n, adjacency, mask, score_mask);
-        let values = scores
-            .clone()
-            .into_data()
-            .try_to_vec::<f32>()
-            .unwrap_or_default();
-        let best = values
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1))
-            .map_or(0, |(i, _)| i);
+        let inputs = graph_inputs(std::iter::once(nodes));
+        let scores = self.plain.reasoner.scores(&inputs);
+        let best = ReasonerWeights::best(&scores);
         let node = (best < nodes.len()).then_some(best);
-        let goal = matrix(1, 3, goal_of(node).to_vec(), &self.device);
-        let labels = self.reasoner.label(scores, goal);
-        let values = labels.into_data().try_to_vec::<f32>().unwrap_or_default();
-        let label = values
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1))
-            .map_or(0, |(i, _)| i);
+        let label = self.plain.reasoner.label(&scores, goal_of(node));
         Choice { node, label }
     }
 
@@ -206,20 +220,104 @@ impl Networks {
             index.min(2),
             labels,
         );
-        let out = self
-            .subgoal
-            .forward(matrix(1, subgoal_width(labels), x, &self.device), None);
-        let v = out.mean.into_data().try_to_vec::<f32>().unwrap_or_default();
-        std::array::from_fn(|j| feature[j] + v.get(j).copied().unwrap_or(0.0))
+        let v = self.plain.subgoal.mean(&x);
+        std::array::from_fn(|j| feature[j] + v[j])
     }
 
     /// The dynamics policy: base, shoulder and elbow steps (radians) for
     /// `delta` = sub-goal − tool tip at those joints.
     pub fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
-        let mut x = delta.to_vec();
-        x.extend(joints);
-        let out = self.dynamics.forward(matrix(1, 6, x, &self.device));
-        let v = out.into_data().try_to_vec::<f32>().unwrap_or_default();
-        std::array::from_fn(|j| v.get(j).copied().unwrap_or(0.0) * ACTION_SCALE)
+        self.plain
+            .dynamics
+            .action(delta, joints)
+            .map(|a| a * ACTION_SCALE)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::learn::data::matrix;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn close(a: &[f32], b: &[f32]) -> bool {
+        a.len() == b.len()
+            && a.iter()
+                .zip(b)
+                .all(|(x, y)| (x - y).abs() <= 1e-4 * (1.0 + x.abs().max(y.abs())))
+    }
+
+    fn values(t: Tensor<2>) -> Vec<f32> {
+        t.into_data().try_to_vec::<f32>().unwrap_or_default()
+    }
+
+    /// The plain run-time passes compute what burn's forward passes do,
+    /// on randomly initialised networks and random inputs of 1 to 20
+    /// products.
+    #[test]
+    fn plain_passes_match_burn() {
+        // Random weights come from the process-wide device stream: not
+        // while a seeded training test runs.
+        let _turn = crate::learn::training::SEEDED_DEVICE
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let device = Device::flex();
+        let c = ModelConfig::new(6);
+        let nets = Networks::from_modules(
+            c.clone(),
+            TrainConfig::default(),
+            Reasoner::new(&c, &device),
+            SubGoalPlanner::new(&c, &device),
+            DynamicsPolicy::new(&c, &device),
+        )
+        .expect("weights readable");
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for m in 1..=20 {
+            let nodes: Vec<[f32; 4]> = (0..m)
+                .map(|_| {
+                    [
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(0.0..0.5),
+                        f32::from(u8::from(rng.random_bool(0.5))),
+                    ]
+                })
+                .collect();
+            let (n, a, mask, score_mask) =
+                graph_inputs(std::iter::once(nodes.as_slice())).tensors(&device);
+            let scores = nets.reasoner.scores(n, a, mask, score_mask);
+            let plain = nets
+                .plain
+                .reasoner
+                .scores(&graph_inputs(std::iter::once(nodes.as_slice())));
+            assert!(close(&values(scores.clone()), &plain), "scores, m = {m}");
+            let goal = [rng.random_range(-1.0..1.0), 0.5, 0.1];
+            let labels = nets
+                .reasoner
+                .label(scores, matrix(1, 3, goal.to_vec(), &device));
+            assert!(
+                close(&values(labels), &nets.plain.reasoner.labels(&plain, goal)),
+                "labels, m = {m}"
+            );
+
+            let mut x = Vec::new();
+            let feature = [0.5, -0.2, 0.1];
+            let tool = [rng.random_range(-1.0..1.0), 0.3, 0.6];
+            subgoal_input(&mut x, feature, tool, m % 6, m % 3, 6);
+            let burn = nets
+                .subgoal
+                .forward(matrix(1, subgoal_width(6), x.clone(), &device), None);
+            assert!(close(&values(burn.mean), &nets.plain.subgoal.mean(&x)));
+
+            let delta = [rng.random_range(-0.5..0.5), 0.1, -0.2];
+            let joints = [rng.random_range(-3.0..3.0), -1.0, 1.5];
+            let input: Vec<f32> = delta.into_iter().chain(joints).collect();
+            let burn = nets.dynamics.forward(matrix(1, 6, input, &device));
+            assert!(close(
+                &values(burn),
+                &nets.plain.dynamics.action(delta, joints)
+            ));
+        }
     }
 }

@@ -11,9 +11,13 @@
 //! - [`training`]: seeded Adam training with early stopping on a held-out
 //!   split;
 //! - [`inference`]: a trained model, saved and loaded as safetensors beside
-//!   its `config.json`.
+//!   its `config.json`;
+//! - `forward`: the same forward passes on plain `f32` slices,
+//!   which [`inference::Networks`] answers with at run time (burn costs
+//!   microseconds per tensor op at batch 1).
 
 pub mod data;
+mod forward;
 pub mod inference;
 pub mod model;
 pub mod training;
@@ -23,4 +27,7 @@ pub use data::{ActionExample, GraphExample, SubGoalExample, TrainingSet};
 pub use model::ModelConfig;
 
 pub use inference::{Choice, Networks, SavedConfig, Task};
-pub use training::{Metrics, NetworkMetrics, Progress, TrainConfig, TrainError, train};
+pub use training::{
+    Coach, Metrics, NetworkMetrics, Progress, Relabelled, RoundMetrics, TrainConfig, TrainError,
+    train,
+};

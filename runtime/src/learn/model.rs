@@ -1,6 +1,7 @@
 //! The three networks (SPEC §2) and their forward passes.
 
 use super::data::{GraphBatch, NODE_FEATURES, subgoal_width};
+use super::forward::{Dense, DynamicsWeights, ReasonerWeights, SageWeights, SubGoalWeights};
 use burn::nn::{Linear, LinearConfig};
 use burn::prelude::*;
 use burn::tensor::activation::{relu, softmax, tanh};
@@ -30,18 +31,35 @@ impl ModelConfig {
     pub fn new(labels: usize) -> ModelConfig {
         ModelConfig {
             labels,
-            graph_hidden: 64,
+            graph_hidden: 32,
             graph_layers: 3,
-            classifier_hidden: 64,
-            subgoal_hidden: 128,
+            classifier_hidden: 32,
+            subgoal_hidden: 64,
             subgoal_latent: 4,
-            dynamics_hidden: 128,
+            dynamics_hidden: 64,
         }
     }
 }
 
 fn linear(i: usize, o: usize, device: &Device) -> Linear {
     LinearConfig::new(i, o).init(device)
+}
+
+/// A layer's weights as plain numbers (`None` if burn's data does not
+/// have the layer's shape).
+fn dense(l: &Linear) -> Option<Dense> {
+    let w = l.weight.val();
+    let [inputs, outputs] = w.dims();
+    let weight = w.into_data().try_to_vec::<f32>().ok()?;
+    let bias = match &l.bias {
+        Some(b) => Some(b.val().into_data().try_to_vec::<f32>().ok()?),
+        None => None,
+    };
+    Dense::new(inputs, outputs, weight, bias)
+}
+
+fn denses(layers: &[Linear]) -> Option<Vec<Dense>> {
+    layers.iter().map(dense).collect()
 }
 
 /// One GraphSAGE layer: h' = normalise(relu(W_self h + W_neigh mean(h_N))).
@@ -170,6 +188,27 @@ impl Reasoner {
         x
     }
 
+    /// The weights for the plain forward pass used at run time.
+    pub(crate) fn weights(&self) -> Option<ReasonerWeights> {
+        Some(ReasonerWeights {
+            layers: self
+                .layers
+                .iter()
+                .map(|l| {
+                    Some(SageWeights {
+                        own: dense(&l.own)?,
+                        neighbours: dense(&l.neighbours)?,
+                    })
+                })
+                .collect::<Option<_>>()?,
+            node_hidden: dense(&self.node_hidden)?,
+            node_score: dense(&self.node_score)?,
+            box_hidden: dense(&self.box_hidden)?,
+            box_score: dense(&self.box_score)?,
+            classifier: denses(&self.classifier)?,
+        })
+    }
+
     pub fn forward(&self, batch: &GraphBatch) -> ReasonerOutput {
         let scores = self.scores(
             batch.nodes.clone(),
@@ -218,6 +257,16 @@ impl SubGoalPlanner {
         }
     }
 
+    /// The weights of the run-time pass (the latent at its mean).
+    pub(crate) fn weights(&self) -> Option<SubGoalWeights> {
+        Some(SubGoalWeights {
+            hidden: denses(&self.hidden)?,
+            latent_mean: dense(&self.latent_mean)?,
+            decoder: dense(&self.decoder)?,
+            mean: dense(&self.mean)?,
+        })
+    }
+
     /// `noise`: standard normal [B, latent] while training, `None` at run
     /// time (the latent's mean).
     pub fn forward(&self, x: Tensor<2>, noise: Option<Tensor<2>>) -> SubGoalOutput {
@@ -259,6 +308,12 @@ impl DynamicsPolicy {
                 linear(h, 3, device),
             ],
         }
+    }
+
+    pub(crate) fn weights(&self) -> Option<DynamicsWeights> {
+        Some(DynamicsWeights {
+            layers: denses(&self.layers)?,
+        })
     }
 
     fn raw(&self, x: Tensor<2>) -> Tensor<2> {

@@ -1,7 +1,10 @@
 //! Seeded training of the three networks: Adam, mini-batches, a held-out
 //! split, early stopping on its loss (the best epoch's weights are kept).
 
-use super::data::{NODE_FEATURES, TrainingSet, action_batch, graph_batch, subgoal_batch};
+use super::data::{
+    ACTION_SCALE, ActionExample, NODE_FEATURES, TrainingSet, action_batch, graph_batch,
+    subgoal_batch,
+};
 use super::inference::Networks;
 use super::model::{DynamicsPolicy, ModelConfig, Reasoner, SubGoalPlanner};
 use burn::module::Module;
@@ -42,6 +45,14 @@ pub struct TrainConfig {
     /// a little lower than demonstrated).
     #[serde(default)]
     pub position_noise: f64,
+    /// DAgger rounds for the dynamics policy (with a [`Coach`]): roll the
+    /// policy out from the demonstrated starts, label the states it
+    /// visits with the expert's action, train on everything so far.
+    #[serde(default)]
+    pub dagger_rounds: usize,
+    /// Most epochs of each DAgger round's training.
+    #[serde(default)]
+    pub dagger_epochs: usize,
 }
 
 impl Default for TrainConfig {
@@ -58,6 +69,8 @@ impl Default for TrainConfig {
             action_batch: 256,
             kl_weight: 1e-3,
             position_noise: 0.0,
+            dagger_rounds: 2,
+            dagger_epochs: 60,
         }
     }
 }
@@ -66,6 +79,8 @@ impl Default for TrainConfig {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Progress {
     pub network: &'static str,
+    /// 0 for the first training, k for DAgger round k.
+    pub round: usize,
     pub epoch: usize,
     pub epochs: usize,
     pub train_loss: f64,
@@ -94,7 +109,39 @@ pub struct Metrics {
     pub reasoner: NetworkMetrics,
     pub subgoal: NetworkMetrics,
     pub dynamics: NetworkMetrics,
+    /// The dynamics policy's rollouts before each DAgger round, and after
+    /// the last (empty without a [`Coach`]).
+    pub dagger: Vec<RoundMetrics>,
     pub seconds: f64,
+}
+
+/// One pass of policy rollouts from the demonstrated starts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RoundMetrics {
+    /// 0: rollouts of the policy trained on the demonstrations alone.
+    pub round: usize,
+    pub rollouts: usize,
+    /// Rollouts that reached their sub-goal within the step budget.
+    pub reached: usize,
+    /// Labelled states added to the training set after this pass.
+    pub added: usize,
+    pub seconds: f64,
+}
+
+/// The expert side of DAgger (Ross et al., 2011): rolls a dynamics policy
+/// out and labels every state it visits with the expert's action there.
+/// `policy(delta, joints)` gives base, shoulder and elbow steps (radians).
+pub trait Coach: Sync {
+    fn relabel(&self, policy: &(dyn Fn([f32; 3], [f32; 3]) -> [f32; 3] + Sync)) -> Relabelled;
+}
+
+/// What a [`Coach`] returns.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Relabelled {
+    /// The visited states with the expert's actions.
+    pub actions: Vec<ActionExample>,
+    pub rollouts: usize,
+    pub reached: usize,
 }
 
 /// What can go wrong before training starts.
@@ -104,6 +151,8 @@ pub enum TrainError {
     Empty(&'static str),
     #[error("a sample has label {label} but the model has {labels} labels")]
     Label { label: usize, labels: usize },
+    #[error("the trained weights: {0}")]
+    Weights(String),
 }
 
 /// Squared action size (in units of 5 degrees) below which the dynamics
@@ -167,7 +216,7 @@ fn argmax_rows(t: Tensor<2>) -> Vec<usize> {
 /// copy of the model.
 #[allow(clippy::too_many_arguments)]
 fn fit<M: Module>(
-    name: &'static str,
+    (name, round): (&'static str, usize),
     mut model: M,
     train: &[usize],
     valid_samples: usize,
@@ -212,6 +261,7 @@ fn fit<M: Module>(
         let (valid_loss, metric) = validate(&model);
         progress(Progress {
             network: name,
+            round,
             epoch,
             epochs: config.epochs,
             train_loss,
@@ -239,11 +289,19 @@ fn fit<M: Module>(
     (model, metrics)
 }
 
+/// burn seeds its CPU device's random numbers process-wide: two trainings
+/// at once in one process would draw from one stream and neither would be
+/// reproducible, so they take turns.
+pub(crate) static SEEDED_DEVICE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// Trains the reasoner, the sub-goal planner and the dynamics policy on
-/// `set`, reproducibly from `config.seed`.
+/// `set`, reproducibly from `config.seed`; with a `coach`, the dynamics
+/// policy then gets `config.dagger_rounds` rounds of DAgger. Trainings in
+/// one process run one after the other.
 pub fn train(
     set: &TrainingSet,
     config: &TrainConfig,
+    coach: Option<&dyn Coach>,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<(Networks, Metrics), TrainError> {
     if set.graphs.is_empty() {
@@ -265,6 +323,9 @@ pub fn train(
     if let Some(label) = too_big {
         return Err(TrainError::Label { label, labels });
     }
+    let _turn = SEEDED_DEVICE
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let started = Instant::now();
     let plain = Device::flex();
     plain.seed(config.seed);
@@ -282,188 +343,268 @@ pub fn train(
     let _ = initial_subgoal.forward(subgoal_batch(&[&set.subgoals[0]], labels, &device).0, None);
     let _ = initial_dynamics.forward(action_batch(&[&set.actions[0]], &device).0);
     let rng_for = |k: u64| ChaCha8Rng::seed_from_u64(config.seed.wrapping_mul(3).wrapping_add(k));
-    let (dynamics, dynamics_metrics, (reasoner, reasoner_metrics), (subgoal, subgoal_metrics)) =
-        std::thread::scope(|scope| {
-            let dynamics = scope.spawn(|| {
-                let mut rng = rng_for(2);
-                train_dynamics(
-                    set,
+    let (
+        (dynamics, dynamics_metrics, dagger),
+        (reasoner, reasoner_metrics),
+        (subgoal, subgoal_metrics),
+    ) = std::thread::scope(|scope| {
+        let dynamics = scope.spawn(|| {
+            let mut rng = rng_for(2);
+            let started = Instant::now();
+            let trained = train_dynamics(
+                &set.actions,
+                config,
+                0,
+                initial_dynamics,
+                &mut rng,
+                &plain,
+                &device,
+                progress,
+            );
+            let (model, mut metrics, dagger) = match coach {
+                Some(coach) => dagger(
+                    coach,
+                    trained,
+                    &set.actions,
                     config,
-                    initial_dynamics,
                     &mut rng,
                     &plain,
                     &device,
                     progress,
-                )
-            });
-            let mut rng = rng_for(0);
-            let position_noise = config.position_noise;
-
-            let reasoner = {
-                let (train_idx, valid_idx) = split(set.graphs.len(), config.holdout, &mut rng);
-                let pick = |idx: &[usize]| idx.iter().map(|&i| &set.graphs[i]).collect::<Vec<_>>();
-                let valid_graphs = pick(&valid_idx);
-                let (reasoner, mut reasoner_metrics) = fit(
-                    "reasoner",
-                    initial_reasoner,
-                    &train_idx,
-                    valid_idx.len(),
-                    config.graph_batch,
-                    config,
-                    &mut rng,
-                    |m, chunk| {
-                        let mut b = graph_batch(&pick(chunk), labels, &device);
-                        if position_noise > 0.0 {
-                            // Sensing noise on (x, y, z) of the present nodes.
-                            let dims = b.nodes.dims();
-                            let xyz = Tensor::<1>::from_floats([1.0, 1.0, 1.0, 0.0, 0.0], &device)
-                                .reshape([1, 1, NODE_FEATURES]);
-                            let noise = Tensor::random(
-                                dims,
-                                Distribution::Normal(0.0, position_noise),
-                                &device,
-                            );
-                            b.nodes = b.nodes + noise * xyz * b.mask.clone();
-                        }
-                        let out = m.forward(&b);
-                        reasoner_loss(out.scores, out.labels, b.target, b.label)
-                    },
-                    |m| {
-                        let graphs = if valid_graphs.is_empty() {
-                            pick(&train_idx)
-                        } else {
-                            valid_graphs.clone()
-                        };
-                        let b = graph_batch(&graphs, labels, &plain);
-                        let out = m.valid().forward(&b);
-                        let loss = scalar(reasoner_loss(
-                            out.scores.clone(),
-                            out.labels.clone(),
-                            b.target.clone(),
-                            b.label.clone(),
-                        ));
-                        let chosen = argmax_rows(out.scores);
-                        let labelled = argmax_rows(out.labels);
-                        let right = graphs
-                            .iter()
-                            .zip(chosen.iter().zip(&labelled))
-                            .filter(|(g, (c, l))| {
-                                let want = if g.target >= g.nodes.len() {
-                                    usize::MAX
-                                } else {
-                                    g.target
-                                };
-                                let got = if **c >= g.nodes.len() {
-                                    usize::MAX
-                                } else {
-                                    **c
-                                };
-                                want == got && **l == g.label
-                            })
-                            .count();
-                        (loss, right as f64 / graphs.len().max(1) as f64)
-                    },
-                    progress,
-                );
-                reasoner_metrics.metric =
-                    "held-out accuracy (node/box and label both right)".into();
-                (reasoner, reasoner_metrics)
+                ),
+                None => (trained.0, trained.1, Vec::new()),
             };
-            let mut rng = rng_for(1);
-            let subgoal = {
-                let (train_idx, valid_idx) = split(set.subgoals.len(), config.holdout, &mut rng);
-                let pick =
-                    |idx: &[usize]| idx.iter().map(|&i| &set.subgoals[i]).collect::<Vec<_>>();
-                let eval_idx = if valid_idx.is_empty() {
-                    train_idx.clone()
-                } else {
-                    valid_idx.clone()
-                };
-                let (vx, vy) = subgoal_batch(&pick(&eval_idx), labels, &plain);
-                let latent = model_config.subgoal_latent;
-                let kl_weight = config.kl_weight;
-                let (subgoal, mut subgoal_metrics) = fit(
-                    "sub-goal",
-                    initial_subgoal,
-                    &train_idx,
-                    valid_idx.len(),
-                    config.subgoal_batch,
-                    config,
-                    &mut rng,
-                    |m, chunk| {
-                        let (x, y) = subgoal_batch(&pick(chunk), labels, &device);
+            metrics.seconds = started.elapsed().as_secs_f64();
+            (model, metrics, dagger)
+        });
+        let mut rng = rng_for(0);
+        let position_noise = config.position_noise;
+
+        let reasoner = {
+            let (train_idx, valid_idx) = split(set.graphs.len(), config.holdout, &mut rng);
+            let pick = |idx: &[usize]| idx.iter().map(|&i| &set.graphs[i]).collect::<Vec<_>>();
+            let valid_graphs = pick(&valid_idx);
+            let (reasoner, mut reasoner_metrics) = fit(
+                ("reasoner", 0),
+                initial_reasoner,
+                &train_idx,
+                valid_idx.len(),
+                config.graph_batch,
+                config,
+                &mut rng,
+                |m, chunk| {
+                    let mut b = graph_batch(&pick(chunk), labels, &device);
+                    if position_noise > 0.0 {
+                        // Sensing noise on (x, y, z) of the present nodes.
+                        let dims = b.nodes.dims();
+                        let xyz = Tensor::<1>::from_floats([1.0, 1.0, 1.0, 0.0, 0.0], &device)
+                            .reshape([1, 1, NODE_FEATURES]);
                         let noise = Tensor::random(
-                            [chunk.len(), latent],
-                            Distribution::Normal(0.0, 1.0),
+                            dims,
+                            Distribution::Normal(0.0, position_noise),
                             &device,
                         );
-                        let out = m.forward(x, Some(noise));
-                        let nll = ((y - out.mean)
-                            .div(out.log_std.clone().exp())
-                            .powf_scalar(2.0)
-                            * 0.5
+                        b.nodes = b.nodes + noise * xyz * b.mask.clone();
+                    }
+                    let out = m.forward(&b);
+                    reasoner_loss(out.scores, out.labels, b.target, b.label)
+                },
+                |m| {
+                    let graphs = if valid_graphs.is_empty() {
+                        pick(&train_idx)
+                    } else {
+                        valid_graphs.clone()
+                    };
+                    let b = graph_batch(&graphs, labels, &plain);
+                    let out = m.valid().forward(&b);
+                    let loss = scalar(reasoner_loss(
+                        out.scores.clone(),
+                        out.labels.clone(),
+                        b.target.clone(),
+                        b.label.clone(),
+                    ));
+                    let chosen = argmax_rows(out.scores);
+                    let labelled = argmax_rows(out.labels);
+                    let right = graphs
+                        .iter()
+                        .zip(chosen.iter().zip(&labelled))
+                        .filter(|(g, (c, l))| {
+                            let want = if g.target >= g.nodes.len() {
+                                usize::MAX
+                            } else {
+                                g.target
+                            };
+                            let got = if **c >= g.nodes.len() {
+                                usize::MAX
+                            } else {
+                                **c
+                            };
+                            want == got && **l == g.label
+                        })
+                        .count();
+                    (loss, right as f64 / graphs.len().max(1) as f64)
+                },
+                progress,
+            );
+            reasoner_metrics.metric = "held-out accuracy (node/box and label both right)".into();
+            (reasoner, reasoner_metrics)
+        };
+        let mut rng = rng_for(1);
+        let subgoal = {
+            let (train_idx, valid_idx) = split(set.subgoals.len(), config.holdout, &mut rng);
+            let pick = |idx: &[usize]| idx.iter().map(|&i| &set.subgoals[i]).collect::<Vec<_>>();
+            let eval_idx = if valid_idx.is_empty() {
+                train_idx.clone()
+            } else {
+                valid_idx.clone()
+            };
+            let (vx, vy) = subgoal_batch(&pick(&eval_idx), labels, &plain);
+            let latent = model_config.subgoal_latent;
+            let kl_weight = config.kl_weight;
+            let (subgoal, mut subgoal_metrics) = fit(
+                ("sub-goal", 0),
+                initial_subgoal,
+                &train_idx,
+                valid_idx.len(),
+                config.subgoal_batch,
+                config,
+                &mut rng,
+                |m, chunk| {
+                    let (x, y) = subgoal_batch(&pick(chunk), labels, &device);
+                    let noise = Tensor::random(
+                        [chunk.len(), latent],
+                        Distribution::Normal(0.0, 1.0),
+                        &device,
+                    );
+                    let out = m.forward(x, Some(noise));
+                    let nll = ((y - out.mean)
+                        .div(out.log_std.clone().exp())
+                        .powf_scalar(2.0)
+                        * 0.5
+                        + out.log_std)
+                        .sum_dim(1)
+                        .mean();
+                    let kl = (out.latent_mean.powf_scalar(2.0)
+                        + out.latent_log_std.clone().mul_scalar(2.0).exp()
+                        - out.latent_log_std.mul_scalar(2.0)
+                        - 1.0)
+                        .sum_dim(1)
+                        .mean()
+                        * 0.5;
+                    nll + kl * kl_weight
+                },
+                |m| {
+                    let out = m.valid().forward(vx.clone(), None);
+                    let diff = vy.clone() - out.mean;
+                    let nll = scalar(
+                        (diff.clone().div(out.log_std.clone().exp()).powf_scalar(2.0) * 0.5
                             + out.log_std)
                             .sum_dim(1)
-                            .mean();
-                        let kl = (out.latent_mean.powf_scalar(2.0)
-                            + out.latent_log_std.clone().mul_scalar(2.0).exp()
-                            - out.latent_log_std.mul_scalar(2.0)
-                            - 1.0)
-                            .sum_dim(1)
-                            .mean()
-                            * 0.5;
-                        nll + kl * kl_weight
-                    },
-                    |m| {
-                        let out = m.valid().forward(vx.clone(), None);
-                        let diff = vy.clone() - out.mean;
-                        let nll = scalar(
-                            (diff.clone().div(out.log_std.clone().exp()).powf_scalar(2.0) * 0.5
-                                + out.log_std)
-                                .sum_dim(1)
-                                .mean(),
-                        );
-                        let error = scalar(diff.powf_scalar(2.0).sum_dim(1).sqrt().mean());
-                        (nll, error)
-                    },
-                    progress,
-                );
-                subgoal_metrics.metric = "held-out mean sub-goal error (m)".into();
-                (subgoal, subgoal_metrics)
-            };
-            let (dynamics, dynamics_metrics) = dynamics
-                .join()
-                .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-            (dynamics, dynamics_metrics, reasoner, subgoal)
-        });
+                            .mean(),
+                    );
+                    let error = scalar(diff.powf_scalar(2.0).sum_dim(1).sqrt().mean());
+                    (nll, error)
+                },
+                progress,
+            );
+            subgoal_metrics.metric = "held-out mean sub-goal error (m)".into();
+            (subgoal, subgoal_metrics)
+        };
+        let dynamics = dynamics
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (dynamics, reasoner, subgoal)
+    });
     let networks = Networks::from_modules(
         model_config,
         config.clone(),
         reasoner.valid(),
         subgoal.valid(),
         dynamics.valid(),
-    );
+    )
+    .map_err(|e| TrainError::Weights(e.to_string()))?;
     let metrics = Metrics {
         reasoner: reasoner_metrics,
         subgoal: subgoal_metrics,
         dynamics: dynamics_metrics,
+        dagger,
         seconds: started.elapsed().as_secs_f64(),
     };
     Ok((networks, metrics))
 }
 
-/// The dynamics policy's training (run on its own thread).
-fn train_dynamics(
-    set: &TrainingSet,
+/// DAgger rounds after the first training: each round rolls the policy
+/// out (the coach), adds the labelled states, and trains on all samples
+/// so far for at most `config.dagger_epochs`; a last pass of rollouts
+/// measures the final policy.
+#[allow(clippy::too_many_arguments)]
+fn dagger(
+    coach: &dyn Coach,
+    trained: (DynamicsPolicy, NetworkMetrics),
+    demonstrated: &[ActionExample],
     config: &TrainConfig,
+    rng: &mut ChaCha8Rng,
+    plain: &Device,
+    device: &Device,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> (DynamicsPolicy, NetworkMetrics, Vec<RoundMetrics>) {
+    let (mut model, mut metrics) = trained;
+    let mut actions = demonstrated.to_vec();
+    let mut rounds = Vec::new();
+    let round_config = TrainConfig {
+        epochs: config.dagger_epochs.max(1),
+        ..config.clone()
+    };
+    for round in 0..=config.dagger_rounds {
+        let started = Instant::now();
+        let Some(weights) = model.weights() else {
+            break;
+        };
+        let policy = |delta: [f32; 3], joints: [f32; 3]| {
+            weights.action(delta, joints).map(|a| a * ACTION_SCALE)
+        };
+        let relabelled = coach.relabel(&policy);
+        let last = round == config.dagger_rounds;
+        rounds.push(RoundMetrics {
+            round,
+            rollouts: relabelled.rollouts,
+            reached: relabelled.reached,
+            added: if last { 0 } else { relabelled.actions.len() },
+            seconds: started.elapsed().as_secs_f64(),
+        });
+        if last || relabelled.actions.is_empty() {
+            break;
+        }
+        actions.extend(relabelled.actions);
+        (model, metrics) = train_dynamics(
+            &actions,
+            &round_config,
+            round + 1,
+            model,
+            rng,
+            plain,
+            device,
+            progress,
+        );
+    }
+    (model, metrics, rounds)
+}
+
+/// The dynamics policy's training (run on its own thread); `round` 0 is
+/// the first training, k the k-th DAgger round.
+#[allow(clippy::too_many_arguments)]
+fn train_dynamics(
+    actions: &[ActionExample],
+    config: &TrainConfig,
+    round: usize,
     initial: DynamicsPolicy,
     rng: &mut ChaCha8Rng,
     plain: &Device,
     device: &Device,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> (DynamicsPolicy, NetworkMetrics) {
-    let (train_idx, valid_idx) = split(set.actions.len(), config.holdout, rng);
-    let pick = |idx: &[usize]| idx.iter().map(|&i| &set.actions[i]).collect::<Vec<_>>();
+    let (train_idx, valid_idx) = split(actions.len(), config.holdout, rng);
+    let pick = |idx: &[usize]| idx.iter().map(|&i| &actions[i]).collect::<Vec<_>>();
     let eval_idx = if valid_idx.is_empty() {
         train_idx.clone()
     } else {
@@ -471,7 +612,7 @@ fn train_dynamics(
     };
     let (ax, ay) = action_batch(&pick(&eval_idx), plain);
     let (dynamics, mut dynamics_metrics) = fit(
-        "dynamics",
+        ("dynamics", round),
         initial,
         &train_idx,
         valid_idx.len(),
@@ -603,7 +744,7 @@ mod tests {
             batches_per_epoch: 15,
             ..TrainConfig::default()
         };
-        let (nets, metrics) = train(&set, &config, &|_| {}).expect("trains");
+        let (nets, metrics) = train(&set, &config, None, &|_| {}).expect("trains");
         assert!(
             metrics.reasoner.valid_metric >= 0.95,
             "reasoner held-out accuracy {}",
@@ -633,7 +774,7 @@ mod tests {
             loaded.action([0.01, 0.02, -0.01], [0.1, -1.0, 1.2])
         );
         // Same seed, same training.
-        let (again, metrics_again) = train(&set, &config, &|_| {}).expect("trains");
+        let (again, metrics_again) = train(&set, &config, None, &|_| {}).expect("trains");
         let losses = |m: &Metrics| {
             [&m.reasoner, &m.subgoal, &m.dynamics]
                 .map(|n| (n.best_epoch, n.train_loss, n.valid_loss))
@@ -657,13 +798,13 @@ mod tests {
             ..TrainingSet::default()
         };
         assert!(matches!(
-            train(&empty, &config, &|_| {}),
+            train(&empty, &config, None, &|_| {}),
             Err(TrainError::Empty(_))
         ));
         let mut set = synthetic(1);
         set.labels = 2;
         assert!(matches!(
-            train(&set, &config, &|_| {}),
+            train(&set, &config, None, &|_| {}),
             Err(TrainError::Label { .. })
         ));
     }

@@ -1,0 +1,255 @@
+//! The trained networks' forward passes on plain `f32` slices, for run
+//! time.
+//!
+//! burn/flex costs a few microseconds per tensor operation at batch 1 and a
+//! reasoner call is some sixty operations (≈ 200 µs measured); the same
+//! arithmetic here takes about ten. The weights are copied once from the
+//! burn modules (see `model.rs`), and a test checks these passes against
+//! burn's on random inputs. Training keeps using burn.
+//!
+//! A dense layer is a loop over its inputs adding a weight column times
+//! the input (contiguous, so it vectorises), skipping inputs that are 0:
+//! after a ReLU about half are. `nalgebra`'s generic `gemv` took 16 µs per
+//! 5-product reasoner decision where this takes less (`cargo bench --bench
+//! learning`).
+
+use super::data::{GraphInputs, NODE_FEATURES};
+
+/// A dense layer: `y = W x + b`.
+#[derive(Debug, Clone)]
+pub(crate) struct Dense {
+    inputs: usize,
+    outputs: usize,
+    /// burn's layout, row-major [in, out]: the weights from input `j` are
+    /// `w[j * outputs..(j + 1) * outputs]`.
+    w: Vec<f32>,
+    b: Vec<f32>,
+}
+
+impl Dense {
+    /// From burn's `weight` (row-major [in, out]) and `bias` ([out];
+    /// `None`: zeros). `None` when the lengths do not fit.
+    pub(crate) fn new(
+        inputs: usize,
+        outputs: usize,
+        weight: Vec<f32>,
+        bias: Option<Vec<f32>>,
+    ) -> Option<Dense> {
+        let b = match bias {
+            Some(b) if b.len() == outputs => b,
+            Some(_) => return None,
+            None => vec![0.0; outputs],
+        };
+        (weight.len() == inputs * outputs).then_some(Dense {
+            inputs,
+            outputs,
+            w: weight,
+            b,
+        })
+    }
+
+    /// `W x + b` for each of the `n` inputs in `x` (`n` rows of
+    /// `self.inputs`), as `n` rows of `self.outputs`.
+    fn apply_rows(&self, x: &[f32], n: usize) -> Vec<f32> {
+        let mut y = Vec::with_capacity(n * self.outputs);
+        for row in x.chunks_exact(self.inputs).take(n) {
+            let start = y.len();
+            y.extend_from_slice(&self.b);
+            let out = &mut y[start..];
+            for (&xj, column) in row.iter().zip(self.w.chunks_exact(self.outputs)) {
+                if xj != 0.0 {
+                    axpy(out, column, xj);
+                }
+            }
+        }
+        y
+    }
+
+    fn apply(&self, x: &[f32]) -> Vec<f32> {
+        self.apply_rows(x, 1)
+    }
+}
+
+/// `y += a x` (vectorised: contiguous, no bounds checks in the loop).
+fn axpy(y: &mut [f32], x: &[f32], a: f32) {
+    for (y, x) in y.iter_mut().zip(x) {
+        *y += a * x;
+    }
+}
+
+fn relu(mut x: Vec<f32>) -> Vec<f32> {
+    x.iter_mut().for_each(|v| *v = v.max(0.0));
+    x
+}
+
+fn tanh(mut x: Vec<f32>) -> Vec<f32> {
+    x.iter_mut().for_each(|v| *v = v.tanh());
+    x
+}
+
+fn argmax(v: impl Iterator<Item = f32>) -> usize {
+    v.enumerate()
+        .fold((0, f32::NEG_INFINITY), |best, (i, x)| {
+            if x > best.1 { (i, x) } else { best }
+        })
+        .0
+}
+
+/// A GraphSAGE layer's two dense maps.
+#[derive(Debug, Clone)]
+pub(crate) struct SageWeights {
+    pub own: Dense,
+    pub neighbours: Dense,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct ReasonerWeights {
+    pub layers: Vec<SageWeights>,
+    pub node_hidden: Dense,
+    pub node_score: Dense,
+    pub box_hidden: Dense,
+    pub box_score: Dense,
+    pub classifier: Vec<Dense>,
+}
+
+impl ReasonerWeights {
+    /// Node and box logits for one graph (`inputs.b == 1`), box last.
+    pub fn scores(&self, inputs: &GraphInputs) -> Vec<f32> {
+        let m = inputs.m;
+        let x = &inputs.nodes[..NODE_FEATURES * m];
+        let adjacency = &inputs.adjacency[..m * m];
+        let present: Vec<bool> = inputs.mask[..m].iter().map(|&v| v > 0.5).collect();
+        // Node embeddings as rows.
+        let mut h = x.to_vec();
+        let mut width = NODE_FEATURES;
+        for layer in &self.layers {
+            // mean(h_N) for every node.
+            let mut mean = vec![0.0; m * width];
+            for (row, weights) in mean.chunks_exact_mut(width).zip(adjacency.chunks_exact(m)) {
+                for (&a, hj) in weights.iter().zip(h.chunks_exact(width)) {
+                    if a != 0.0 {
+                        axpy(row, hj, a);
+                    }
+                }
+            }
+            let mut out = layer.own.apply_rows(&h, m);
+            let neighbours = layer.neighbours.apply_rows(&mean, m);
+            width = layer.own.outputs;
+            for (i, row) in out.chunks_exact_mut(width).enumerate() {
+                for (o, n) in row.iter_mut().zip(&neighbours[i * width..]) {
+                    *o = (*o + n).max(0.0);
+                }
+                let norm = (row.iter().map(|v| v * v).sum::<f32>() + 1e-12).sqrt();
+                let scale = if present[i] { 1.0 / norm } else { 0.0 };
+                row.iter_mut().for_each(|v| *v *= scale);
+            }
+            h = out;
+        }
+        let hidden = relu(self.node_hidden.apply_rows(x, m));
+        let node = self.node_score.apply_rows(&hidden, m);
+        let mut scores: Vec<f32> = node
+            .iter()
+            .zip(&present)
+            .map(|(&s, &here)| if here { s } else { s - 1e9 })
+            .collect();
+        // Max of the embeddings (>= 0, padding 0) and of the present raw
+        // inputs.
+        let mut pooled = vec![0.0f32; width + NODE_FEATURES];
+        for row in h.chunks_exact(width) {
+            for (p, v) in pooled.iter_mut().zip(row) {
+                *p = p.max(*v);
+            }
+        }
+        for r in 0..NODE_FEATURES {
+            pooled[width + r] = (0..m)
+                .map(|i| x[i * NODE_FEATURES + r] + if present[i] { 0.0 } else { -1e3 })
+                .fold(f32::NEG_INFINITY, f32::max);
+        }
+        let hidden = relu(self.box_hidden.apply(&pooled));
+        scores.push(self.box_score.apply(&hidden)[0]);
+        scores
+    }
+
+    /// The best output of `scores` (`scores.len() - 1` is the box).
+    pub fn best(scores: &[f32]) -> usize {
+        argmax(scores.iter().copied())
+    }
+
+    /// Label logits from the scores and the handled product's goal.
+    pub fn labels(&self, scores: &[f32], goal: [f32; 3]) -> Vec<f32> {
+        let top = scores.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let exp: Vec<f32> = scores.iter().map(|s| (s - top).exp()).collect();
+        let sum: f32 = exp.iter().sum();
+        let boxed = exp.last().copied().unwrap_or(0.0) / sum;
+        let node = exp[..exp.len().saturating_sub(1)]
+            .iter()
+            .copied()
+            .fold(f32::NEG_INFINITY, f32::max)
+            / sum;
+        let mut x = vec![boxed, node, goal[0], goal[1], goal[2]];
+        let last = self.classifier.len().saturating_sub(1);
+        for (i, layer) in self.classifier.iter().enumerate() {
+            x = layer.apply(&x);
+            if i < last {
+                x = relu(x);
+            }
+        }
+        x
+    }
+
+    pub fn label(&self, scores: &[f32], goal: [f32; 3]) -> usize {
+        argmax(self.labels(scores, goal).into_iter())
+    }
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct SubGoalWeights {
+    pub hidden: Vec<Dense>,
+    pub latent_mean: Dense,
+    pub decoder: Dense,
+    pub mean: Dense,
+}
+
+impl SubGoalWeights {
+    /// The Gaussian head's mean with the latent at its mean (run time).
+    pub fn mean(&self, input: &[f32]) -> [f32; 3] {
+        let mut h = input.to_vec();
+        for layer in &self.hidden {
+            h = tanh(layer.apply(&h));
+        }
+        let z = self.latent_mean.apply(&h);
+        h.extend(z);
+        let d = tanh(self.decoder.apply(&h));
+        let out = self.mean.apply(&d);
+        std::array::from_fn(|j| out.get(j).copied().unwrap_or(0.0))
+    }
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct DynamicsWeights {
+    pub layers: Vec<Dense>,
+}
+
+impl DynamicsWeights {
+    fn raw(&self, x: Vec<f32>) -> Vec<f32> {
+        let last = self.layers.len().saturating_sub(1);
+        let mut x = x;
+        for (i, layer) in self.layers.iter().enumerate() {
+            x = layer.apply(&x);
+            if i < last {
+                x = relu(x);
+            }
+        }
+        x
+    }
+
+    /// Fractions of the largest step for (delta, joints), minus the output
+    /// at delta 0.
+    pub fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
+        let moved = self.raw(delta.into_iter().chain(joints).collect());
+        let still = self.raw([0.0; 3].into_iter().chain(joints).collect());
+        std::array::from_fn(|j| {
+            moved.get(j).copied().unwrap_or(0.0) - still.get(j).copied().unwrap_or(0.0)
+        })
+    }
+}
