@@ -127,12 +127,10 @@ pub(crate) fn graph_inputs<'a>(
         }
         g.score_mask.push(0.0);
         for i in 0..n {
-            let neighbours: Vec<usize> = [i.checked_sub(1), (i + 1 < n).then_some(i + 1)]
-                .into_iter()
-                .flatten()
-                .collect();
-            for &j in &neighbours {
-                g.adjacency[k * m * m + i * m + j] = 1.0 / neighbours.len() as f32;
+            let neighbours = [i.checked_sub(1), (i + 1 < n).then_some(i + 1)];
+            let degree = neighbours.iter().flatten().count() as f32;
+            for &j in neighbours.iter().flatten() {
+                g.adjacency[k * m * m + i * m + j] = 1.0 / degree;
             }
         }
     }

@@ -50,23 +50,26 @@ impl Dense {
 
     /// `W x + b` for each of the `n` inputs in `x` (`n` rows of
     /// `self.inputs`), as `n` rows of `self.outputs`.
-    fn apply_rows(&self, x: &[f32], n: usize) -> Vec<f32> {
-        let mut y = Vec::with_capacity(n * self.outputs);
-        for row in x.chunks_exact(self.inputs).take(n) {
-            let start = y.len();
-            y.extend_from_slice(&self.b);
-            let out = &mut y[start..];
+    /// `W x + b` for each of the `n` rows of `x` (rows of `self.inputs`)
+    /// into the first `n` rows of `y` (rows of `self.outputs`).
+    fn apply_into(&self, x: &[f32], n: usize, y: &mut [f32]) {
+        let rows = x
+            .chunks_exact(self.inputs)
+            .zip(y.chunks_exact_mut(self.outputs));
+        for (row, out) in rows.take(n) {
+            out.copy_from_slice(&self.b);
             for (&xj, column) in row.iter().zip(self.w.chunks_exact(self.outputs)) {
                 if xj != 0.0 {
                     axpy(out, column, xj);
                 }
             }
         }
-        y
     }
 
     fn apply(&self, x: &[f32]) -> Vec<f32> {
-        self.apply_rows(x, 1)
+        let mut y = vec![0.0; self.outputs];
+        self.apply_into(x, 1, &mut y);
+        y
     }
 }
 
@@ -95,6 +98,13 @@ fn argmax(v: impl Iterator<Item = f32>) -> usize {
         .0
 }
 
+/// Values of the reasoner's scratch kept on the stack (8 KiB).
+const STACK_SCRATCH: usize = 2048;
+
+/// Cache-line aligned scratch.
+#[repr(align(64))]
+struct Aligned([f32; STACK_SCRATCH]);
+
 /// A GraphSAGE layer's two dense maps.
 #[derive(Debug, Clone)]
 pub(crate) struct SageWeights {
@@ -114,59 +124,102 @@ pub(crate) struct ReasonerWeights {
 
 impl ReasonerWeights {
     /// Node and box logits for one graph (`inputs.b == 1`), box last.
+    ///
+    /// Works in one scratch allocation: inside a run the allocator is as
+    /// cold as the weights, and a dozen allocations cost microseconds.
     pub fn scores(&self, inputs: &GraphInputs) -> Vec<f32> {
         let m = inputs.m;
         let x = &inputs.nodes[..NODE_FEATURES * m];
         let adjacency = &inputs.adjacency[..m * m];
-        let present: Vec<bool> = inputs.mask[..m].iter().map(|&v| v > 0.5).collect();
-        // Node embeddings as rows.
-        let mut h = x.to_vec();
-        let mut width = NODE_FEATURES;
+        let present = &inputs.mask[..m];
+        let width = self
+            .layers
+            .iter()
+            .map(|l| l.own.outputs)
+            .chain([
+                NODE_FEATURES,
+                self.node_hidden.outputs,
+                self.box_hidden.inputs,
+                self.box_hidden.outputs,
+            ])
+            .max()
+            .unwrap_or(NODE_FEATURES)
+            // Whole cache lines: every part of the scratch starts aligned.
+            .next_multiple_of(16);
+        // On the stack when it fits (5 products need 1,056 values): a fresh
+        // heap block inside a run can cost page faults.
+        let needed = 4 * m * width + 2 * width;
+        let mut stack = Aligned([0.0; STACK_SCRATCH]);
+        let mut heap = Vec::new();
+        let scratch: &mut [f32] = if needed <= STACK_SCRATCH {
+            &mut stack.0[..needed]
+        } else {
+            heap.resize(needed, 0.0);
+            &mut heap
+        };
+        let (h, rest) = scratch.split_at_mut(m * width);
+        let (mean, rest) = rest.split_at_mut(m * width);
+        let (out, rest) = rest.split_at_mut(m * width);
+        let (neighbours, rest) = rest.split_at_mut(m * width);
+        let (pooled, hidden) = rest.split_at_mut(width);
+        // Node embeddings as rows of `w` values.
+        h[..x.len()].copy_from_slice(x);
+        let mut w = NODE_FEATURES;
         for layer in &self.layers {
             // mean(h_N) for every node.
-            let mut mean = vec![0.0; m * width];
-            for (row, weights) in mean.chunks_exact_mut(width).zip(adjacency.chunks_exact(m)) {
-                for (&a, hj) in weights.iter().zip(h.chunks_exact(width)) {
+            let mean = &mut mean[..m * w];
+            mean.fill(0.0);
+            for (row, weights) in mean.chunks_exact_mut(w).zip(adjacency.chunks_exact(m)) {
+                for (&a, hj) in weights.iter().zip(h.chunks_exact(w)) {
                     if a != 0.0 {
                         axpy(row, hj, a);
                     }
                 }
             }
-            let mut out = layer.own.apply_rows(&h, m);
-            let neighbours = layer.neighbours.apply_rows(&mean, m);
-            width = layer.own.outputs;
-            for (i, row) in out.chunks_exact_mut(width).enumerate() {
-                for (o, n) in row.iter_mut().zip(&neighbours[i * width..]) {
-                    *o = (*o + n).max(0.0);
+            let o = layer.own.outputs;
+            layer.own.apply_into(&h[..m * w], m, out);
+            layer.neighbours.apply_into(mean, m, neighbours);
+            let rows = out.chunks_exact_mut(o).zip(neighbours.chunks_exact(o));
+            for ((row, n), &here) in rows.zip(present) {
+                for (v, n) in row.iter_mut().zip(n) {
+                    *v = (*v + n).max(0.0);
                 }
                 let norm = (row.iter().map(|v| v * v).sum::<f32>() + 1e-12).sqrt();
-                let scale = if present[i] { 1.0 / norm } else { 0.0 };
+                let scale = if here > 0.5 { 1.0 / norm } else { 0.0 };
                 row.iter_mut().for_each(|v| *v *= scale);
             }
-            h = out;
+            h[..m * o].copy_from_slice(&out[..m * o]);
+            w = o;
         }
-        let hidden = relu(self.node_hidden.apply_rows(x, m));
-        let node = self.node_score.apply_rows(&hidden, m);
-        let mut scores: Vec<f32> = node
-            .iter()
-            .zip(&present)
-            .map(|(&s, &here)| if here { s } else { s - 1e9 })
-            .collect();
-        // Max of the embeddings (>= 0, padding 0) and of the present raw
-        // inputs.
-        let mut pooled = vec![0.0f32; width + NODE_FEATURES];
-        for row in h.chunks_exact(width) {
+        // Node scores from the nodes' own inputs.
+        let k = self.node_hidden.outputs;
+        self.node_hidden.apply_into(x, m, out);
+        out[..m * k].iter_mut().for_each(|v| *v = v.max(0.0));
+        let mut scores = vec![0.0f32; m + 1];
+        self.node_score.apply_into(&out[..m * k], m, &mut scores);
+        for (s, &here) in scores.iter_mut().zip(present) {
+            if here <= 0.5 {
+                *s -= 1e9;
+            }
+        }
+        // The box: max of the embeddings (>= 0, padding 0) and of the
+        // present raw inputs.
+        let pooled = &mut pooled[..w + NODE_FEATURES];
+        pooled.fill(0.0);
+        for row in h[..m * w].chunks_exact(w) {
             for (p, v) in pooled.iter_mut().zip(row) {
                 *p = p.max(*v);
             }
         }
         for r in 0..NODE_FEATURES {
-            pooled[width + r] = (0..m)
-                .map(|i| x[i * NODE_FEATURES + r] + if present[i] { 0.0 } else { -1e3 })
+            pooled[w + r] = (0..m)
+                .map(|i| x[i * NODE_FEATURES + r] + if present[i] > 0.5 { 0.0 } else { -1e3 })
                 .fold(f32::NEG_INFINITY, f32::max);
         }
-        let hidden = relu(self.box_hidden.apply(&pooled));
-        scores.push(self.box_score.apply(&hidden)[0]);
+        let hidden = &mut hidden[..self.box_hidden.outputs];
+        self.box_hidden.apply_into(pooled, 1, hidden);
+        hidden.iter_mut().for_each(|v| *v = v.max(0.0));
+        self.box_score.apply_into(hidden, 1, &mut scores[m..]);
         scores
     }
 
