@@ -13,7 +13,7 @@
 //! 5-product reasoner decision where this takes less (`cargo bench --bench
 //! learning`).
 
-use super::data::{GraphInputs, NODE_FEATURES};
+use super::data::NODE_FEATURES;
 
 /// A dense layer: `y = W x + b`.
 #[derive(Debug, Clone)]
@@ -98,12 +98,24 @@ fn argmax(v: impl Iterator<Item = f32>) -> usize {
         .0
 }
 
-/// Values of the reasoner's scratch kept on the stack (8 KiB).
+/// Values of scratch kept on the stack (8 KiB): 5 products need 1,280.
 const STACK_SCRATCH: usize = 2048;
 
 /// Cache-line aligned scratch.
 #[repr(align(64))]
 struct Aligned([f32; STACK_SCRATCH]);
+
+/// `f` on `len` zeroed values: on the stack, aligned to a cache line, when
+/// they fit; else on the heap.
+fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f32]) -> R) -> R {
+    if len <= STACK_SCRATCH {
+        let mut stack = Aligned([0.0; STACK_SCRATCH]);
+        f(&mut stack.0[..len])
+    } else {
+        let mut heap = vec![0.0; len];
+        f(&mut heap)
+    }
+}
 
 /// A GraphSAGE layer's two dense maps.
 #[derive(Debug, Clone)]
@@ -123,15 +135,16 @@ pub(crate) struct ReasonerWeights {
 }
 
 impl ReasonerWeights {
-    /// Node and box logits for one graph (`inputs.b == 1`), box last.
+    /// Node and box logits for one graph of present products, (x, y, z,
+    /// I) in inventory order; the box last. The same inputs as training's
+    /// (`data::graph_inputs`): the place along the chain is added, and a
+    /// node's neighbours are the chain's.
     ///
-    /// Works in one scratch allocation: inside a run the allocator is as
-    /// cold as the weights, and a dozen allocations cost microseconds.
-    pub fn scores(&self, inputs: &GraphInputs) -> Vec<f32> {
-        let m = inputs.m;
-        let x = &inputs.nodes[..NODE_FEATURES * m];
-        let adjacency = &inputs.adjacency[..m * m];
-        let present = &inputs.mask[..m];
+    /// Works in one cache-aligned scratch on the stack: inside a run the
+    /// allocator is as cold as the weights, and a fresh heap block can
+    /// cost page faults (measured: 16–20 µs against 19–23 µs per decision).
+    pub fn scores(&self, nodes: &[[f32; 4]]) -> Vec<f32> {
+        let m = nodes.len();
         let width = self
             .layers
             .iter()
@@ -146,80 +159,77 @@ impl ReasonerWeights {
             .unwrap_or(NODE_FEATURES)
             // Whole cache lines: every part of the scratch starts aligned.
             .next_multiple_of(16);
-        // On the stack when it fits (5 products need 1,056 values): a fresh
-        // heap block inside a run can cost page faults.
-        let needed = 4 * m * width + 2 * width;
-        let mut stack = Aligned([0.0; STACK_SCRATCH]);
-        let mut heap = Vec::new();
-        let scratch: &mut [f32] = if needed <= STACK_SCRATCH {
-            &mut stack.0[..needed]
-        } else {
-            heap.resize(needed, 0.0);
-            &mut heap
-        };
-        let (h, rest) = scratch.split_at_mut(m * width);
-        let (mean, rest) = rest.split_at_mut(m * width);
-        let (out, rest) = rest.split_at_mut(m * width);
-        let (neighbours, rest) = rest.split_at_mut(m * width);
-        let (pooled, hidden) = rest.split_at_mut(width);
-        // Node embeddings as rows of `w` values.
-        h[..x.len()].copy_from_slice(x);
-        let mut w = NODE_FEATURES;
-        for layer in &self.layers {
-            // mean(h_N) for every node.
-            let mean = &mut mean[..m * w];
-            mean.fill(0.0);
-            for (row, weights) in mean.chunks_exact_mut(w).zip(adjacency.chunks_exact(m)) {
-                for (&a, hj) in weights.iter().zip(h.chunks_exact(w)) {
-                    if a != 0.0 {
-                        axpy(row, hj, a);
+        let mut scores = vec![0.0f32; m + 1];
+        with_scratch(5 * m * width + 2 * width, |scratch| {
+            let (x, rest) = scratch.split_at_mut(m * width);
+            let (h, rest) = rest.split_at_mut(m * width);
+            let (mean, rest) = rest.split_at_mut(m * width);
+            let (out, rest) = rest.split_at_mut(m * width);
+            let (neighbours, rest) = rest.split_at_mut(m * width);
+            let (pooled, hidden) = rest.split_at_mut(width);
+            // The node inputs as rows: (x, y, z, I, place along the chain).
+            let last = m.saturating_sub(1).max(1) as f32;
+            let x = &mut x[..m * NODE_FEATURES];
+            for (i, (row, node)) in x.chunks_exact_mut(NODE_FEATURES).zip(nodes).enumerate() {
+                row[..4].copy_from_slice(node);
+                row[4] = i as f32 / last;
+            }
+            h[..x.len()].copy_from_slice(x);
+            let mut w = NODE_FEATURES;
+            for layer in &self.layers {
+                // The mean of each node's chain neighbours.
+                let mean = &mut mean[..m * w];
+                let rows = &h[..m * w];
+                for (i, row) in mean.chunks_exact_mut(w).enumerate() {
+                    let before = i.checked_sub(1);
+                    let after = (i + 1 < m).then_some(i + 1);
+                    let degree = [before, after].iter().flatten().count();
+                    row.fill(0.0);
+                    for j in [before, after].into_iter().flatten() {
+                        axpy(row, &rows[j * w..(j + 1) * w], 1.0 / degree as f32);
                     }
                 }
-            }
-            let o = layer.own.outputs;
-            layer.own.apply_into(&h[..m * w], m, out);
-            layer.neighbours.apply_into(mean, m, neighbours);
-            let rows = out.chunks_exact_mut(o).zip(neighbours.chunks_exact(o));
-            for ((row, n), &here) in rows.zip(present) {
-                for (v, n) in row.iter_mut().zip(n) {
-                    *v = (*v + n).max(0.0);
+                let o = layer.own.outputs;
+                layer.own.apply_into(rows, m, out);
+                layer.neighbours.apply_into(mean, m, neighbours);
+                let rows = out.chunks_exact_mut(o).zip(neighbours.chunks_exact(o));
+                for (row, n) in rows.take(m) {
+                    for (v, n) in row.iter_mut().zip(n) {
+                        *v = (*v + n).max(0.0);
+                    }
+                    let norm = (row.iter().map(|v| v * v).sum::<f32>() + 1e-12).sqrt();
+                    row.iter_mut().for_each(|v| *v /= norm);
                 }
-                let norm = (row.iter().map(|v| v * v).sum::<f32>() + 1e-12).sqrt();
-                let scale = if here > 0.5 { 1.0 / norm } else { 0.0 };
-                row.iter_mut().for_each(|v| *v *= scale);
+                h[..m * o].copy_from_slice(&out[..m * o]);
+                w = o;
             }
-            h[..m * o].copy_from_slice(&out[..m * o]);
-            w = o;
-        }
-        // Node scores from the nodes' own inputs.
-        let k = self.node_hidden.outputs;
-        self.node_hidden.apply_into(x, m, out);
-        out[..m * k].iter_mut().for_each(|v| *v = v.max(0.0));
-        let mut scores = vec![0.0f32; m + 1];
-        self.node_score.apply_into(&out[..m * k], m, &mut scores);
-        for (s, &here) in scores.iter_mut().zip(present) {
-            if here <= 0.5 {
-                *s -= 1e9;
+            // Node scores from the nodes' own inputs.
+            let k = self.node_hidden.outputs;
+            self.node_hidden.apply_into(x, m, out);
+            out[..m * k].iter_mut().for_each(|v| *v = v.max(0.0));
+            self.node_score.apply_into(&out[..m * k], m, &mut scores);
+            // The box: max of the embeddings (>= 0) and of the raw inputs.
+            let pooled = &mut pooled[..w + NODE_FEATURES];
+            pooled.fill(f32::NEG_INFINITY);
+            for row in h[..m * w].chunks_exact(w) {
+                for (p, v) in pooled.iter_mut().zip(row) {
+                    *p = p.max(*v);
+                }
             }
-        }
-        // The box: max of the embeddings (>= 0, padding 0) and of the
-        // present raw inputs.
-        let pooled = &mut pooled[..w + NODE_FEATURES];
-        pooled.fill(0.0);
-        for row in h[..m * w].chunks_exact(w) {
-            for (p, v) in pooled.iter_mut().zip(row) {
-                *p = p.max(*v);
+            for row in x.chunks_exact(NODE_FEATURES) {
+                for (p, v) in pooled[w..].iter_mut().zip(row) {
+                    *p = p.max(*v);
+                }
             }
-        }
-        for r in 0..NODE_FEATURES {
-            pooled[w + r] = (0..m)
-                .map(|i| x[i * NODE_FEATURES + r] + if present[i] > 0.5 { 0.0 } else { -1e3 })
-                .fold(f32::NEG_INFINITY, f32::max);
-        }
-        let hidden = &mut hidden[..self.box_hidden.outputs];
-        self.box_hidden.apply_into(pooled, 1, hidden);
-        hidden.iter_mut().for_each(|v| *v = v.max(0.0));
-        self.box_score.apply_into(hidden, 1, &mut scores[m..]);
+            if m == 0 {
+                pooled.fill(0.0);
+                pooled[w..].fill(-1e3);
+            }
+            let hidden = &mut hidden[..self.box_hidden.outputs];
+            self.box_hidden.apply_into(pooled, 1, hidden);
+            hidden.iter_mut().for_each(|v| *v = v.max(0.0));
+            self.box_score.apply_into(hidden, 1, &mut scores[m..]);
+        });
         scores
     }
 
@@ -239,15 +249,32 @@ impl ReasonerWeights {
             .copied()
             .fold(f32::NEG_INFINITY, f32::max)
             / sum;
-        let mut x = vec![boxed, node, goal[0], goal[1], goal[2]];
-        let last = self.classifier.len().saturating_sub(1);
-        for (i, layer) in self.classifier.iter().enumerate() {
-            x = layer.apply(&x);
-            if i < last {
-                x = relu(x);
+        let input = [boxed, node, goal[0], goal[1], goal[2]];
+        let width = self
+            .classifier
+            .iter()
+            .map(|l| l.outputs)
+            .chain([input.len()])
+            .max()
+            .unwrap_or(input.len())
+            .next_multiple_of(16);
+        let mut logits = Vec::new();
+        with_scratch(2 * width, |scratch| {
+            let (mut a, mut b) = scratch.split_at_mut(width);
+            a[..input.len()].copy_from_slice(&input);
+            let mut n = input.len();
+            let last = self.classifier.len().saturating_sub(1);
+            for (i, layer) in self.classifier.iter().enumerate() {
+                layer.apply_into(&a[..n], 1, b);
+                n = layer.outputs;
+                if i < last {
+                    b[..n].iter_mut().for_each(|v| *v = v.max(0.0));
+                }
+                std::mem::swap(&mut a, &mut b);
             }
-        }
-        x
+            logits.extend_from_slice(&a[..n]);
+        });
+        logits
     }
 
     pub fn label(&self, scores: &[f32], goal: [f32; 3]) -> usize {

@@ -1,7 +1,7 @@
 //! A trained model: the three networks on the CPU, called with plain
 //! numbers; saved as `config.json` and three safetensors files.
 
-use super::data::{ACTION_SCALE, graph_inputs, subgoal_input, subgoal_width};
+use super::data::{ACTION_SCALE, subgoal_input, subgoal_width};
 use super::forward::{DynamicsWeights, ReasonerWeights, SubGoalWeights};
 use super::model::{DynamicsPolicy, ModelConfig, Reasoner, SubGoalPlanner};
 use super::training::TrainConfig;
@@ -194,8 +194,7 @@ impl Networks {
         nodes: &[[f32; 4]],
         goal_of: impl FnOnce(Option<usize>) -> [f32; 3],
     ) -> Choice {
-        let inputs = graph_inputs(std::iter::once(nodes));
-        let scores = self.plain.reasoner.scores(&inputs);
+        let scores = self.plain.reasoner.scores(nodes);
         let best = ReasonerWeights::best(&scores);
         let node = (best < nodes.len()).then_some(best);
         let label = self.plain.reasoner.label(&scores, goal_of(node));
@@ -237,7 +236,7 @@ impl Networks {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::learn::data::matrix;
+    use crate::learn::data::{graph_inputs, matrix};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -287,10 +286,7 @@ mod tests {
             let (n, a, mask, score_mask) =
                 graph_inputs(std::iter::once(nodes.as_slice())).tensors(&device);
             let scores = nets.reasoner.scores(n, a, mask, score_mask);
-            let plain = nets
-                .plain
-                .reasoner
-                .scores(&graph_inputs(std::iter::once(nodes.as_slice())));
+            let plain = nets.plain.reasoner.scores(&nodes);
             assert!(close(&values(scores.clone()), &plain), "scores, m = {m}");
             let goal = [rng.random_range(-1.0..1.0), 0.5, 0.1];
             let labels = nets
