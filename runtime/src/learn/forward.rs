@@ -9,9 +9,9 @@
 //!
 //! A dense layer is a loop over its inputs adding a weight column times
 //! the input (contiguous, so it vectorises), skipping inputs that are 0:
-//! after a ReLU about half are. `nalgebra`'s generic `gemv` took 16 µs per
-//! 5-product reasoner decision where this takes less (`cargo bench --bench
-//! learning`).
+//! after a ReLU about half are. With `nalgebra`'s generic `gemv` a
+//! 5-product reasoner decision took 16 µs, here 4.3 µs (`cargo bench -p
+//! packwright-runtime --bench learning`, warm caches).
 
 use super::data::NODE_FEATURES;
 
@@ -48,8 +48,6 @@ impl Dense {
         })
     }
 
-    /// `W x + b` for each of the `n` inputs in `x` (`n` rows of
-    /// `self.inputs`), as `n` rows of `self.outputs`.
     /// `W x + b` for each of the `n` rows of `x` (rows of `self.inputs`)
     /// into the first `n` rows of `y` (rows of `self.outputs`).
     fn apply_into(&self, x: &[f32], n: usize, y: &mut [f32]) {
@@ -80,11 +78,6 @@ fn axpy(y: &mut [f32], x: &[f32], a: f32) {
     }
 }
 
-fn relu(mut x: Vec<f32>) -> Vec<f32> {
-    x.iter_mut().for_each(|v| *v = v.max(0.0));
-    x
-}
-
 fn tanh(mut x: Vec<f32>) -> Vec<f32> {
     x.iter_mut().for_each(|v| *v = v.tanh());
     x
@@ -98,23 +91,55 @@ fn argmax(v: impl Iterator<Item = f32>) -> usize {
         .0
 }
 
-/// Values of scratch kept on the stack (8 KiB): 5 products need 1,280.
-const STACK_SCRATCH: usize = 2048;
-
-/// Cache-line aligned scratch.
+/// Cache-line aligned values.
 #[repr(align(64))]
-struct Aligned([f32; STACK_SCRATCH]);
+struct Aligned<const N: usize>([f32; N]);
 
-/// `f` on `len` zeroed values: on the stack, aligned to a cache line, when
-/// they fit; else on the heap.
-fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f32]) -> R) -> R {
-    if len <= STACK_SCRATCH {
-        let mut stack = Aligned([0.0; STACK_SCRATCH]);
+/// `f` on `len` zeroed values: on the stack in a block of `N`, aligned to a
+/// cache line, when they fit; else on the heap.
+fn with_scratch<const N: usize, R>(len: usize, f: impl FnOnce(&mut [f32]) -> R) -> R {
+    if len <= N {
+        let mut stack = Aligned([0.0; N]);
         f(&mut stack.0[..len])
     } else {
         let mut heap = vec![0.0; len];
         f(&mut heap)
     }
+}
+
+/// The reasoner's scratch on the stack (8 KiB): 5 products need 1,280
+/// values, 20 products 4,928 (heap).
+const REASONER_SCRATCH: usize = 2048;
+/// A multilayer perceptron's scratch on the stack: two layers of up to 128.
+const MLP_SCRATCH: usize = 256;
+
+/// `layers` in turn on `input`, a ReLU between two layers (none after the
+/// last), in stack scratch.
+fn relu_mlp(layers: &[Dense], input: &[f32]) -> Vec<f32> {
+    let width = layers
+        .iter()
+        .map(|l| l.outputs)
+        .chain([input.len()])
+        .max()
+        .unwrap_or(input.len())
+        .next_multiple_of(16);
+    let mut out = Vec::new();
+    with_scratch::<MLP_SCRATCH, _>(2 * width, |scratch| {
+        let (mut a, mut b) = scratch.split_at_mut(width);
+        a[..input.len()].copy_from_slice(input);
+        let mut n = input.len();
+        let last = layers.len().saturating_sub(1);
+        for (i, layer) in layers.iter().enumerate() {
+            layer.apply_into(&a[..n], 1, b);
+            n = layer.outputs;
+            if i < last {
+                b[..n].iter_mut().for_each(|v| *v = v.max(0.0));
+            }
+            std::mem::swap(&mut a, &mut b);
+        }
+        out.extend_from_slice(&a[..n]);
+    });
+    out
 }
 
 /// A GraphSAGE layer's two dense maps.
@@ -160,7 +185,7 @@ impl ReasonerWeights {
             // Whole cache lines: every part of the scratch starts aligned.
             .next_multiple_of(16);
         let mut scores = vec![0.0f32; m + 1];
-        with_scratch(5 * m * width + 2 * width, |scratch| {
+        with_scratch::<REASONER_SCRATCH, _>(5 * m * width + 2 * width, |scratch| {
             let (x, rest) = scratch.split_at_mut(m * width);
             let (h, rest) = rest.split_at_mut(m * width);
             let (mean, rest) = rest.split_at_mut(m * width);
@@ -249,32 +274,7 @@ impl ReasonerWeights {
             .copied()
             .fold(f32::NEG_INFINITY, f32::max)
             / sum;
-        let input = [boxed, node, goal[0], goal[1], goal[2]];
-        let width = self
-            .classifier
-            .iter()
-            .map(|l| l.outputs)
-            .chain([input.len()])
-            .max()
-            .unwrap_or(input.len())
-            .next_multiple_of(16);
-        let mut logits = Vec::new();
-        with_scratch(2 * width, |scratch| {
-            let (mut a, mut b) = scratch.split_at_mut(width);
-            a[..input.len()].copy_from_slice(&input);
-            let mut n = input.len();
-            let last = self.classifier.len().saturating_sub(1);
-            for (i, layer) in self.classifier.iter().enumerate() {
-                layer.apply_into(&a[..n], 1, b);
-                n = layer.outputs;
-                if i < last {
-                    b[..n].iter_mut().for_each(|v| *v = v.max(0.0));
-                }
-                std::mem::swap(&mut a, &mut b);
-            }
-            logits.extend_from_slice(&a[..n]);
-        });
-        logits
+        relu_mlp(&self.classifier, &[boxed, node, goal[0], goal[1], goal[2]])
     }
 
     pub fn label(&self, scores: &[f32], goal: [f32; 3]) -> usize {
@@ -311,23 +311,13 @@ pub(crate) struct DynamicsWeights {
 }
 
 impl DynamicsWeights {
-    fn raw(&self, x: Vec<f32>) -> Vec<f32> {
-        let last = self.layers.len().saturating_sub(1);
-        let mut x = x;
-        for (i, layer) in self.layers.iter().enumerate() {
-            x = layer.apply(&x);
-            if i < last {
-                x = relu(x);
-            }
-        }
-        x
-    }
-
     /// Fractions of the largest step for (delta, joints), minus the output
     /// at delta 0.
     pub fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
-        let moved = self.raw(delta.into_iter().chain(joints).collect());
-        let still = self.raw([0.0; 3].into_iter().chain(joints).collect());
+        let [a, b, c] = delta;
+        let [d, e, f] = joints;
+        let moved = relu_mlp(&self.layers, &[a, b, c, d, e, f]);
+        let still = relu_mlp(&self.layers, &[0.0, 0.0, 0.0, d, e, f]);
         std::array::from_fn(|j| {
             moved.get(j).copied().unwrap_or(0.0) - still.get(j).copied().unwrap_or(0.0)
         })
