@@ -10,7 +10,7 @@
 //! A dense layer is a loop over its inputs adding a weight column times
 //! the input (contiguous, so it vectorises), skipping inputs that are 0:
 //! after a ReLU about half are. With `nalgebra`'s generic `gemv` a
-//! 5-product reasoner decision took 16 µs, here 4.3 µs (`cargo bench -p
+//! 5-product reasoner decision took 16 µs, here 4–6 µs (`cargo bench -p
 //! packwright-runtime --bench learning`, warm caches).
 
 use super::data::NODE_FEATURES;
