@@ -10,12 +10,14 @@
 //! - [`data`]: training samples and batching into tensors;
 //! - [`training`]: seeded Adam training with early stopping on a held-out
 //!   split;
+//! - `dagger`: DAgger rounds for the dynamics policy through a [`Coach`];
 //! - [`inference`]: a trained model, saved and loaded as safetensors beside
 //!   its `config.json`;
 //! - `forward`: the same forward passes on plain `f32` slices,
 //!   which [`inference::Networks`] answers with at run time (burn costs
 //!   microseconds per tensor op at batch 1).
 
+mod dagger;
 pub mod data;
 mod forward;
 pub mod inference;
@@ -26,8 +28,6 @@ pub use data::{ActionExample, GraphExample, SubGoalExample, TrainingSet};
 
 pub use model::ModelConfig;
 
+pub use dagger::{Coach, Relabelled, RoundMetrics};
 pub use inference::{Choice, Networks, SavedConfig, Task};
-pub use training::{
-    Coach, Metrics, NetworkMetrics, Progress, Relabelled, RoundMetrics, TrainConfig, TrainError,
-    train,
-};
+pub use training::{Metrics, NetworkMetrics, Progress, TrainConfig, TrainError, train};
