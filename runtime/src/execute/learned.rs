@@ -349,10 +349,7 @@ impl<W: World> Runner<'_, W> {
                         tip: goal,
                         suction: switch,
                     }];
-                    self.ceiling = Some(ceiling);
-                    let plan = self.plan_stage(start, &target, 0.0, held, ignore);
-                    self.ceiling = None;
-                    let plan = plan?;
+                    let plan = self.plan_stage(start, &target, 0.0, held, ignore, Some(ceiling))?;
                     self.timing.subgoal_us.pop();
                     let path = plan.first().map(|(p, _)| p.as_slice()).unwrap_or(&[]);
                     checked_samples(
@@ -603,7 +600,7 @@ fn learned_manipulate<W: World>(
         suction: Suction::Keep,
     }];
     let planner = std::mem::replace(&mut runner.planner, PlannerKind::Expert);
-    let plan = runner.plan_stage(obs.joints, &up, 0.0, None, Some(&name));
+    let plan = runner.plan_stage(obs.joints, &up, 0.0, None, Some(&name), None);
     runner.planner = planner;
     runner.timing.subgoal_us.pop();
     let plan = plan.map_err(fail)?;

@@ -163,9 +163,6 @@ struct Runner<'a, W: World> {
     execution_steps: usize,
     log: Option<&'a mut MotionLog>,
     timing: Timing,
-    /// How high a lone release sub-goal may be raised (the previous
-    /// sub-goal's height), when `plan_stage` is not given that sub-goal.
-    ceiling: Option<f64>,
 }
 
 /// What a stage's sub-goals are recorded with.
@@ -196,7 +193,6 @@ impl<'a, W: World> Runner<'a, W> {
             execution_steps: 0,
             log,
             timing: Timing::default(),
-            ceiling: None,
         }
     }
 
@@ -217,7 +213,10 @@ impl<'a, W: World> Runner<'a, W> {
         self.checker.set_products(&bodies);
     }
 
-    /// Plans the joint waypoints from `from` to each sub-goal.
+    /// Plans the joint waypoints from `from` to each sub-goal. A release
+    /// the wrist cannot reach is raised up to the previous sub-goal's
+    /// height; `ceiling` is that height for a release that comes first in
+    /// `goals` (else it cannot be raised).
     fn plan_stage(
         &mut self,
         from: Joints,
@@ -225,6 +224,7 @@ impl<'a, W: World> Runner<'a, W> {
         yaw: f64,
         held: Option<&Held>,
         ignore: Option<&str>,
+        ceiling: Option<f64>,
     ) -> Result<Vec<(Vec<Joints>, Suction)>, Failure> {
         let started = Instant::now();
         let mut out = Vec::new();
@@ -256,7 +256,7 @@ impl<'a, W: World> Runner<'a, W> {
             // rest of the way.
             let release_ceiling = goals
                 .get(k.wrapping_sub(1))
-                .map_or(self.ceiling.unwrap_or(g.tip[2]), |prev| prev.tip[2]);
+                .map_or(ceiling.unwrap_or(g.tip[2]), |prev| prev.tip[2]);
             let target = solve(g.tip[2])
                 .or_else(|| {
                     (g.suction == Suction::Off)
@@ -407,7 +407,7 @@ impl<'a, W: World> Runner<'a, W> {
         let h = spec.size[2];
         let cell = &self.task.cell;
         let picking = expert::picking(centre, h, cell.lift);
-        let plan = self.plan_stage(obs.joints, &picking, yaw, None, Some(&name))?;
+        let plan = self.plan_stage(obs.joints, &picking, yaw, None, Some(&name), None)?;
         let pick_info = StageInfo {
             stage: 0,
             feature: centre,
@@ -431,7 +431,7 @@ impl<'a, W: World> Runner<'a, W> {
         );
         self.sync_products(&obs);
         // Placing the product square in its slot: yaw 0 (it turns with the cup).
-        let plan = self.plan_stage(obs.joints, &placing, 0.0, Some(&held), None)?;
+        let plan = self.plan_stage(obs.joints, &placing, 0.0, Some(&held), None, None)?;
         let box_top = cell
             .slots
             .get(s)
@@ -451,7 +451,7 @@ impl<'a, W: World> Runner<'a, W> {
             tip: [slot[0], slot[1], placing[1].tip[2]],
             suction: Suction::Keep,
         }];
-        let plan = self.plan_stage(obs.joints, &up, 0.0, None, Some(&name))?;
+        let plan = self.plan_stage(obs.joints, &up, 0.0, None, Some(&name), None)?;
         self.run_stage(plan, None, Some(&name), None)
     }
 }
