@@ -10,6 +10,7 @@ pub mod error;
 pub mod execute;
 pub mod expert;
 pub mod learn;
+pub mod policy;
 pub mod record;
 pub mod relabel;
 pub mod robot;

@@ -9,7 +9,7 @@
 //! violation).
 
 use super::*;
-use crate::learn::Networks;
+use crate::policy::Policy;
 use crate::world::Seen;
 
 /// Most dynamics-policy steps per sub-goal.
@@ -167,14 +167,14 @@ pub fn expected_next(task: &OrderTask, seen: &[Seen]) -> Option<usize> {
 /// cell's lift, then into their slot), and compares every decision with
 /// the demonstrated rule (inventory order). `Err` names the first wrong
 /// decision.
-pub fn reasoner_trial(nets: &Networks, task: &OrderTask, seen: &[Seen]) -> Result<(), String> {
+pub fn reasoner_trial(nets: &dyn Policy, task: &OrderTask, seen: &[Seen]) -> Result<(), String> {
     let mut seen = seen.to_vec();
     for _ in 0..=task.assignment.len() {
         let Some(want) = expected_next(task, &seen) else {
             return Ok(());
         };
         let (nodes, which) = graph(task, &seen);
-        let choice = nets.reason(&nodes, |n| {
+        let choice = nets.reason(&nodes, &|n| {
             n.map_or([0.0; 3], |n| goal_input(task, &which, &seen, n))
         });
         let got = choice.node.map(|n| which[n]);
@@ -193,7 +193,7 @@ pub fn reasoner_trial(nets: &Networks, task: &OrderTask, seen: &[Seen]) -> Resul
         }
         let (nodes, which) = graph(task, &seen);
         let goal = f32s(task.goal(want, s));
-        let choice = nets.reason(&nodes, |_| goal);
+        let choice = nets.reason(&nodes, &|_| goal);
         if choice.node.is_some() || choice.label != s + 1 {
             return Err(format!(
                 "placing {name}: chose {} with label {}, the demonstrations use the box, label {}",
@@ -227,7 +227,7 @@ impl<W: World> Runner<'_, W> {
     #[allow(clippy::too_many_arguments)]
     fn rollout(
         &mut self,
-        nets: &Networks,
+        nets: &dyn Policy,
         start: Joints,
         goal: [f64; 3],
         tolerance: f64,
@@ -266,7 +266,7 @@ impl<W: World> Runner<'_, W> {
     #[allow(clippy::too_many_arguments)]
     fn learned_stage(
         &mut self,
-        nets: &Networks,
+        nets: &dyn Policy,
         product: &str,
         feature: [f64; 3],
         label: usize,
@@ -384,7 +384,7 @@ pub fn run_learned<W: World>(
     world: &mut W,
     arm: &Arm,
     task: &OrderTask,
-    nets: &Networks,
+    nets: &dyn Policy,
     seed: u64,
 ) -> Report {
     // The planner is RRT-Connect: it serves the fallbacks.
@@ -448,7 +448,7 @@ pub fn run_learned<W: World>(
 /// One product: decide, pick, decide, place, back off.
 fn learned_product<W: World>(
     runner: &mut Runner<'_, W>,
-    nets: &Networks,
+    nets: &dyn Policy,
     fallbacks: &mut Vec<Fallback>,
     products: &mut [ProductReport],
 ) -> Result<(), Stop> {
@@ -456,7 +456,7 @@ fn learned_product<W: World>(
     let obs = runner.world.observe();
     let (nodes, which) = graph(task, &obs.products);
     let decided = Instant::now();
-    let choice = nets.reason(&nodes, |n| {
+    let choice = nets.reason(&nodes, &|n| {
         n.map_or([0.0; 3], |n| goal_input(task, &which, &obs.products, n))
     });
     runner
@@ -515,7 +515,7 @@ fn learned_product<W: World>(
 
 fn learned_manipulate<W: World>(
     runner: &mut Runner<'_, W>,
-    nets: &Networks,
+    nets: &dyn Policy,
     p: usize,
     s: usize,
     fallbacks: &mut Vec<Fallback>,
@@ -546,7 +546,7 @@ fn learned_manipulate<W: World>(
     let (nodes, which) = graph(task, &obs.products);
     let goal = f32s(task.goal(p, s));
     let decided = Instant::now();
-    let choice = nets.reason(&nodes, |_| goal);
+    let choice = nets.reason(&nodes, &|_| goal);
     runner
         .timing
         .decision_us
