@@ -5,12 +5,13 @@
 //! meets deltas it never saw (measured: stalls 1–4 cm short within 30
 //! steps). [`ExpertCoach`] rolls the policy out with forward kinematics
 //! from every demonstrated sub-goal start towards the demonstrated
-//! sub-goal, exactly as the learned runtime loop steps (clipped to 5
-//! degrees, the wrist keeping the cup down), and labels each state it
+//! sub-goal through the learned runtime loop's own stepping
+//! (`execute::policy_steps`: clipped to 5 degrees, the wrist keeping the
+//! cup down), and labels each state it
 //! visits with the expert's action there: the straight joint-space step
 //! towards the joints the expert reached the sub-goal with.
 
-use crate::execute::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down};
+use crate::execute::{REACHED, REACHED_VIA, policy_steps};
 use crate::learn::{ActionExample, Coach, Relabelled};
 use crate::record::{self, MotionLog};
 use crate::robot::{Arm, Joints};
@@ -76,34 +77,26 @@ impl<'a> ExpertCoach<'a> {
         policy: &(dyn Fn([f32; 3], [f32; 3]) -> [f32; 3] + Sync),
     ) -> (Vec<ActionExample>, bool) {
         let f = |v: [f64; 3]| v.map(|x| x as f32);
-        let mut q = m.start;
         let mut visited = Vec::new();
-        for _ in 0..=MAX_POLICY_STEPS {
-            let tip: [f64; 3] = self
-                .arm
-                .tool_tip(&self.base, &q, self.suction)
-                .coords
-                .into();
-            let delta: [f64; 3] = std::array::from_fn(|j| m.target[j] - tip[j]);
-            if delta.iter().map(|d| d * d).sum::<f64>().sqrt() <= m.tolerance {
-                return (visited, true);
-            }
-            if visited.len() == MAX_POLICY_STEPS {
-                break;
-            }
-            let joints = [q[0], q[1], q[2]];
-            visited.push(ActionExample {
-                delta: f(delta),
-                joints: f(joints),
-                action: f(record::action(&q, &m.goal)),
-            });
-            let step = record::clip(policy(f(delta), f(joints)).map(f64::from));
-            match cup_down(self.arm, &self.base, &q, step) {
-                Some(next) => q = next,
-                None => break,
-            }
-        }
-        (visited, false)
+        let reached = policy_steps(
+            self.arm,
+            &self.base,
+            self.suction,
+            m.start,
+            m.target,
+            m.tolerance,
+            &mut |q, delta| {
+                let joints = f([q[0], q[1], q[2]]);
+                visited.push(ActionExample {
+                    delta: f(delta),
+                    joints,
+                    action: f(record::action(q, &m.goal)),
+                });
+                policy(f(delta), joints)
+            },
+        )
+        .is_ok();
+        (visited, reached)
     }
 }
 

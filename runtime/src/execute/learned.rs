@@ -107,6 +107,40 @@ pub fn cup_down(arm: &Arm, base: &Isometry3<f64>, q: &Joints, step: [f64; 3]) ->
     (kept && arm.within_limits(&next)).then_some(next)
 }
 
+/// The dynamics policy's steps from `start` towards the cup-tip position
+/// `goal`, with forward kinematics, as the learned loop takes them: at
+/// most [`MAX_POLICY_STEPS`], each `action(q, delta)` (base, shoulder,
+/// elbow, radians; delta = goal − cup tip) scaled down to 5 degrees, the
+/// wrist keeping the cup down; until the tip is within `tolerance`. The
+/// joints after each step, or why the goal was not reached. DAgger's
+/// rollouts (`crate::relabel`) step through this too.
+pub fn policy_steps(
+    arm: &Arm,
+    base: &Isometry3<f64>,
+    suction: f64,
+    start: Joints,
+    goal: [f64; 3],
+    tolerance: f64,
+    action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
+) -> Result<Vec<Joints>, Shortfall> {
+    let mut q = start;
+    let mut steps = Vec::new();
+    loop {
+        let tip: [f64; 3] = arm.tool_tip(base, &q, suction).coords.into();
+        let delta: [f64; 3] = std::array::from_fn(|j| goal[j] - tip[j]);
+        let away = delta.iter().map(|d| d * d).sum::<f64>().sqrt();
+        if away <= tolerance {
+            return Ok(steps);
+        }
+        if steps.len() == MAX_POLICY_STEPS {
+            return Err(Shortfall::Short(away));
+        }
+        let step = record::clip(action(&q, delta).map(f64::from));
+        q = cup_down(arm, base, &q, step).ok_or(Shortfall::Limits)?;
+        steps.push(q);
+    }
+}
+
 /// The reasoner's graph: (x, y, z, I) of every product seen, in inventory
 /// order, and the product index of each node.
 fn graph(task: &OrderTask, seen: &[Seen]) -> (Vec<[f32; 4]>, Vec<usize>) {
@@ -235,28 +269,24 @@ impl<W: World> Runner<'_, W> {
         ignore: Option<&str>,
         first_action_us: &mut Option<f64>,
     ) -> Result<Vec<Joints>, Shortfall> {
-        let mut q = start;
-        let mut steps = Vec::new();
-        loop {
-            let tip = self.tip(&q);
-            let delta: [f64; 3] = std::array::from_fn(|j| goal[j] - tip[j]);
-            let away = delta.iter().map(|d| d * d).sum::<f64>().sqrt();
-            if away <= tolerance {
-                break;
-            }
-            if steps.len() == MAX_POLICY_STEPS {
-                return Err(Shortfall::Short(away));
-            }
-            let called = Instant::now();
-            let action = nets.action(f32s(delta), [q[0] as f32, q[1] as f32, q[2] as f32]);
-            first_action_us.get_or_insert(called.elapsed().as_secs_f64() * 1e6);
-            let step = record::clip(action.map(f64::from));
-            q = cup_down(self.arm, &self.base, &q, step).ok_or(Shortfall::Limits)?;
-            steps.push(q);
-        }
-        if steps.is_empty() {
+        let suction = self.task.cell.suction;
+        let steps = policy_steps(
+            self.arm,
+            &self.base,
+            suction,
+            start,
+            goal,
+            tolerance,
+            &mut |q, delta| {
+                let called = Instant::now();
+                let action = nets.action(f32s(delta), [q[0] as f32, q[1] as f32, q[2] as f32]);
+                first_action_us.get_or_insert(called.elapsed().as_secs_f64() * 1e6);
+                action
+            },
+        )?;
+        let Some(&q) = steps.last() else {
             return Ok(Vec::new());
-        }
+        };
         checked_samples(self.arm, &self.checker, start, &[q], held, ignore)
             .or_else(|_| checked_samples(self.arm, &self.checker, start, &steps, held, ignore))
             .map_err(Shortfall::Collides)

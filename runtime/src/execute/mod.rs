@@ -30,7 +30,7 @@ use std::time::Instant;
 mod learned;
 pub use learned::{
     Fallback, MAX_POLICY_STEPS, REACHED, REACHED_VIA, Shortfall, cup_down, expected_next,
-    reasoner_trial, run_learned,
+    policy_steps, reasoner_trial, run_learned,
 };
 
 /// A product is packed when its centre is this close to its slot goal.
