@@ -3,6 +3,7 @@
 //! writes, and how it exits.
 
 use clap::{Args, Parser, Subcommand};
+use packwright_interface::PlannerKind;
 use std::path::PathBuf;
 
 #[derive(Debug, Parser)]
@@ -121,17 +122,8 @@ pub struct ShowArgs {
     pub json: bool,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum PlannerArg {
-    /// The scripted demonstrator: straight joint motions between the
-    /// sub-goals' inverse-kinematics solutions.
-    Expert,
-    /// The same sub-goals joined by RRT-Connect (the baseline).
-    Rrt,
-    /// The trained networks: the reasoner chooses, the sub-goal planner
-    /// and the dynamics policy move; RRT-Connect when a motion would
-    /// collide or fall short.
-    Learned,
+fn planner(s: &str) -> Result<PlannerKind, String> {
+    s.parse()
 }
 
 #[derive(Debug, Args)]
@@ -146,10 +138,15 @@ pub struct ExecuteArgs {
     /// suite such as `case1_3of5/007`.
     #[arg(long, value_name = "NAME")]
     pub scenario: Option<String>,
-    /// Who plans the motion. Default: `learned` when `--model` is given or
-    /// the bundled model was trained on the order's cell, else `expert`.
-    #[arg(long, value_enum)]
-    pub planner: Option<PlannerArg>,
+    /// Who plans the motion: `expert` (the scripted demonstrator: straight
+    /// joint motions between the sub-goals' inverse-kinematics solutions),
+    /// `rrt` (the same sub-goals joined by RRT-Connect, the baseline) or
+    /// `learned` (the reasoner chooses, the sub-goal planner and the
+    /// dynamics policy move; RRT-Connect when a motion would collide or
+    /// fall short). Default: `learned` when `--model` is given or the
+    /// bundled model was trained on the order's cell, else `expert`.
+    #[arg(long, value_name = "PLANNER", value_parser = planner)]
+    pub planner: Option<PlannerKind>,
     /// A model directory written by `packwright train` (default: the
     /// bundled model, trained on `orders/`).
     #[arg(long, value_name = "MODEL_DIR")]

@@ -1,7 +1,8 @@
 //! The `packwright` command line: argument parsing, file IO and output.
 //! The language and compiler live in `packwright-grammar` and
-//! `packwright-compiler`; this crate is the edge where files are read and
-//! written.
+//! `packwright-compiler`, the robot half in its crates, the glue between
+//! them in `packwright-pipeline`; this crate is the edge where files are
+//! read and written and results printed.
 
 /// Like `print!`/`println!`/`eprint!`/`eprintln!`, but a closed pipe
 /// (`packwright show out | head`) is not a panic: output just stops.
@@ -22,12 +23,9 @@ macro_rules! errln {
     ($($t:tt)*) => {{ use std::io::Write as _; let _ = writeln!(std::io::stderr().lock(), $($t)*); }};
 }
 
-pub mod bridge;
 pub mod cli;
 pub mod commands;
 pub mod fsio;
-pub mod learning;
-pub mod stats;
 
 use std::process::ExitCode;
 

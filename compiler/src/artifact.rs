@@ -228,3 +228,20 @@ pub struct CaseRecord {
     /// Every present product at the start, in node order.
     pub start: Vec<At>,
 }
+
+/// The tensor names of `graphs.safetensors`, in documented order (README,
+/// "Artifacts"): emitted by `emit`, read by `show` and by training.
+pub mod tensor {
+    pub const NODES: &str = "nodes";
+    pub const NODE_MASK: &str = "node_mask";
+    pub const GOAL: &str = "goal";
+    pub const TARGET: &str = "target";
+    pub const LABEL: &str = "label";
+    pub const STAGE: &str = "stage";
+    pub const DEMO: &str = "demo";
+    pub const EDGE_INDEX: &str = "edge_index";
+    /// Every tensor, in documented order.
+    pub const ALL: [&str; 8] = [
+        NODES, NODE_MASK, GOAL, TARGET, LABEL, STAGE, DEMO, EDGE_INDEX,
+    ];
+}

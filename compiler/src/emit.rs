@@ -346,42 +346,48 @@ fn le_bytes<T: Copy, const N: usize>(values: &[T], to: impl Fn(T) -> [u8; N]) ->
 /// `graphs.safetensors`; tensor names, dtypes and shapes are documented in
 /// the README.
 fn tensors(g: &Graphs) -> Result<Vec<u8>, Error> {
+    use crate::artifact::tensor;
     let (s, m, e) = (g.s, g.m, g.edges());
     let data: Vec<(&str, Dtype, Vec<usize>, Vec<u8>)> = vec![
         (
-            "nodes",
+            tensor::NODES,
             Dtype::F32,
             vec![s, m, 4],
             le_bytes(&g.nodes, f32::to_le_bytes),
         ),
-        ("node_mask", Dtype::U8, vec![s, m], g.node_mask.clone()),
         (
-            "goal",
+            tensor::NODE_MASK,
+            Dtype::U8,
+            vec![s, m],
+            g.node_mask.clone(),
+        ),
+        (
+            tensor::GOAL,
             Dtype::F32,
             vec![s, 3],
             le_bytes(&g.goal, f32::to_le_bytes),
         ),
         (
-            "target",
+            tensor::TARGET,
             Dtype::I64,
             vec![s],
             le_bytes(&g.target, i64::to_le_bytes),
         ),
         (
-            "label",
+            tensor::LABEL,
             Dtype::I64,
             vec![s],
             le_bytes(&g.label, i64::to_le_bytes),
         ),
-        ("stage", Dtype::U8, vec![s], g.stage.clone()),
+        (tensor::STAGE, Dtype::U8, vec![s], g.stage.clone()),
         (
-            "demo",
+            tensor::DEMO,
             Dtype::I64,
             vec![s],
             le_bytes(&g.demo, i64::to_le_bytes),
         ),
         (
-            "edge_index",
+            tensor::EDGE_INDEX,
             Dtype::I64,
             vec![2, e],
             le_bytes(&g.edge_index, i64::to_le_bytes),

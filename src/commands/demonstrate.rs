@@ -3,10 +3,12 @@
 use crate::Exit;
 use crate::cli::DemonstrateArgs;
 use crate::fsio::write_file_atomically;
-use crate::learning::{read_json, replay_all};
 use anyhow::bail;
 use packwright_compiler::artifact::{Manifest, WorldFile};
-use packwright_runtime::record::MotionLog;
+use packwright_interface::outcome::Stage;
+use packwright_interface::record::MotionLog;
+use packwright_pipeline::artifacts::read_json;
+use packwright_pipeline::replay::replay_all;
 use safetensors::tensor::{Dtype, TensorView};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -53,7 +55,12 @@ fn tensors(log: &MotionLog, demo_of: &[i64]) -> anyhow::Result<Vec<u8>> {
             "subgoal_stage",
             Dtype::U8,
             vec![n],
-            s.iter().map(|x| x.stage).collect(),
+            s.iter()
+                .map(|x| match x.stage {
+                    Stage::Picking => 0,
+                    Stage::Placing => 1,
+                })
+                .collect(),
         ),
         (
             "subgoal_index",

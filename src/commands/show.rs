@@ -11,16 +11,7 @@ use std::fmt::Write;
 use std::path::Path;
 
 /// The tensors of `graphs.safetensors`, in documented order.
-pub const TENSORS: [&str; 8] = [
-    "nodes",
-    "node_mask",
-    "goal",
-    "target",
-    "label",
-    "stage",
-    "demo",
-    "edge_index",
-];
+pub const TENSORS: [&str; 8] = tensor::ALL;
 
 fn read_json<T: DeserializeOwned>(dir: &Path, name: &str) -> anyhow::Result<T> {
     let path = dir.join(name);

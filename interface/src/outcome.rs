@@ -1,0 +1,424 @@
+//! Typed results of packing an order: per product, why it failed, the
+//! learned planner's fallbacks and violations, and planning times. Each
+//! has a `Display` for people and serialises for `--json`; no caller ever
+//! looks inside a message to decide anything.
+
+use crate::world::{Body, Contact, WorldError};
+use serde::{Serialize, Serializer};
+use std::fmt;
+
+/// A product is packed when its centre is this close to its slot goal (m).
+pub const SUCCESS_RADIUS: f64 = 0.02;
+
+/// The two stages of handling one product.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stage {
+    Picking,
+    Placing,
+}
+
+impl fmt::Display for Stage {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Stage::Picking => "picking",
+            Stage::Placing => "placing",
+        })
+    }
+}
+
+/// Which planner packs: the scripted expert, the expert's sub-goals joined
+/// by RRT-Connect (the paper's baseline), or the learned networks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlannerKind {
+    Expert,
+    Rrt,
+    Learned,
+}
+
+impl PlannerKind {
+    pub const ALL: [PlannerKind; 3] = [PlannerKind::Expert, PlannerKind::Rrt, PlannerKind::Learned];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            PlannerKind::Expert => "expert",
+            PlannerKind::Rrt => "rrt",
+            PlannerKind::Learned => "learned",
+        }
+    }
+}
+
+impl fmt::Display for PlannerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for PlannerKind {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<PlannerKind, String> {
+        PlannerKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| format!("unknown planner `{s}` (expert, rrt or learned)"))
+    }
+}
+
+/// A collision found by a check before anything moves.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Hit {
+    /// Body `a` (an arm part or the held product) would touch `b`.
+    Bodies { a: Body, b: Body },
+    /// The joints to check are not finite.
+    InvalidJoints,
+}
+
+impl fmt::Display for Hit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Hit::Bodies { a, b } => write!(f, "{a} with {b}"),
+            Hit::InvalidJoints => write!(f, "non-finite joints"),
+        }
+    }
+}
+
+/// Why the robot could not pack one product (the arm then stops).
+/// Sub-goals are numbered from 1 within their stage.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Failure {
+    /// No collision-free inverse-kinematics solution puts the cup there.
+    Unreachable { subgoal: usize, tip: [f64; 3] },
+    /// RRT-Connect found no path to the sub-goal.
+    NoPath { subgoal: usize },
+    /// The checked motion to the sub-goal would collide.
+    WouldCollide { subgoal: usize, hit: Hit },
+    /// The smoother found no trajectory (its reason, for people).
+    Smoothing { subgoal: usize, reason: String },
+    /// The world reported a contact while the arm moved.
+    Collision { contact: Contact },
+    /// The world refused a command or failed.
+    World { error: String },
+    /// The product was no longer seen when the robot came to it.
+    Disappeared,
+    /// The product was released this far (m) from its goal.
+    Misplaced { error_m: f64 },
+    /// The product was in its slot, then something moved it out.
+    MovedLater,
+}
+
+impl From<WorldError> for Failure {
+    fn from(e: WorldError) -> Failure {
+        Failure::World {
+            error: e.to_string(),
+        }
+    }
+}
+
+impl fmt::Display for Failure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Failure::Unreachable { subgoal, tip } => write!(
+                f,
+                "sub-goal {subgoal} at ({:.3}, {:.3}, {:.3}) is unreachable",
+                tip[0], tip[1], tip[2]
+            ),
+            Failure::NoPath { subgoal } => {
+                write!(f, "RRT-Connect found no path to sub-goal {subgoal}")
+            }
+            Failure::WouldCollide { subgoal, hit } => {
+                write!(f, "the motion to sub-goal {subgoal} would collide: {hit}")
+            }
+            Failure::Smoothing { subgoal, reason } => {
+                write!(f, "the motion to sub-goal {subgoal}: {reason}")
+            }
+            Failure::Collision { contact } => write!(f, "collision: {contact}"),
+            Failure::World { error } => write!(f, "{error}"),
+            Failure::Disappeared => write!(f, "the product disappeared"),
+            Failure::Misplaced { error_m } => write!(f, "released {error_m:.3} m from its goal"),
+            Failure::MovedLater => write!(f, "moved out of its slot later"),
+        }
+    }
+}
+
+/// What became of one selected product.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "outcome", content = "reason")]
+pub enum Outcome {
+    /// Placed by the robot within the success radius.
+    Packed,
+    /// Already in its slot when the robot came to it (a worker packed it).
+    AlreadyPacked,
+    /// Not in the cell: waits for restocking.
+    Waiting,
+    /// The robot could not pack it; the arm stopped.
+    Failed(Failure),
+    /// Not attempted because the arm stopped earlier.
+    NotAttempted,
+}
+
+impl Outcome {
+    /// Packed by the robot or by a worker.
+    pub fn in_slot(&self) -> bool {
+        matches!(self, Outcome::Packed | Outcome::AlreadyPacked)
+    }
+}
+
+impl fmt::Display for Outcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Outcome::Packed => write!(f, "packed"),
+            Outcome::AlreadyPacked => write!(f, "already packed"),
+            Outcome::Waiting => write!(f, "waiting (missing)"),
+            Outcome::Failed(why) => write!(f, "failed: {why}"),
+            Outcome::NotAttempted => write!(f, "not attempted"),
+        }
+    }
+}
+
+/// Why a dynamics-policy rollout did not give a motion.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Shortfall {
+    /// The step budget (`steps`) ended this far (m) from the sub-goal.
+    Short { steps: usize, distance_m: f64 },
+    /// A step would leave the joint limits (or the wrist could not keep
+    /// the cup down).
+    Limits,
+    /// The motion would collide.
+    Collides { hit: Hit },
+}
+
+impl Shortfall {
+    /// A short name of the kind, for counting.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Shortfall::Short { .. } => "short",
+            Shortfall::Limits => "joint limits",
+            Shortfall::Collides { .. } => "would collide",
+        }
+    }
+}
+
+impl fmt::Display for Shortfall {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Shortfall::Short { steps, distance_m } => write!(
+                f,
+                "{steps} policy steps ended {:.1} mm away",
+                distance_m * 1e3
+            ),
+            Shortfall::Limits => write!(f, "a policy step would leave the joint limits"),
+            Shortfall::Collides { hit } => write!(f, "the policy's motion would collide ({hit})"),
+        }
+    }
+}
+
+/// A stage handed to RRT-Connect by the learned planner: where and why.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Fallback {
+    /// The product handled.
+    pub product: String,
+    pub stage: Stage,
+    /// The stage's sub-goal (1, 2, 3) whose rollout fell short.
+    pub subgoal: usize,
+    pub why: Shortfall,
+}
+
+/// What kind of fallback, for counting (stage, sub-goal, shortfall kind).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct FallbackKind {
+    pub stage: Stage,
+    pub subgoal: usize,
+    pub why: &'static str,
+}
+
+impl fmt::Display for FallbackKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} {}: {}", self.stage, self.subgoal, self.why)
+    }
+}
+
+impl Fallback {
+    pub fn kind(&self) -> FallbackKind {
+        FallbackKind {
+            stage: self.stage,
+            subgoal: self.subgoal,
+            why: self.why.kind(),
+        }
+    }
+}
+
+impl fmt::Display for Fallback {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} {}, sub-goal {}: {}",
+            self.stage, self.product, self.subgoal, self.why
+        )
+    }
+}
+
+/// A reasoner decision that breaks the order (the arm stops).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Violation {
+    /// Chose the box with nothing in the cup.
+    BoxWithNothingHeld,
+    /// Chose a product the order does not select.
+    NotSelected { product: String },
+    /// Chose a product already in its slot.
+    AlreadyInSlot { product: String },
+    /// Gave a slot label while picking.
+    LabelWhenPicking { product: String, label: usize },
+    /// Chose a product instead of the box while holding one.
+    ProductWhileHolding { chosen: String, held: String },
+    /// Chose another slot than the order's.
+    WrongSlot {
+        product: String,
+        label: usize,
+        slot: String,
+        expected: usize,
+    },
+    /// A decision other than the taught sequence's (judged by `eval`).
+    OutOfSequence {
+        stage: Stage,
+        chosen: Option<String>,
+        label: usize,
+        expected: String,
+        expected_label: usize,
+    },
+    /// The reasoner went on after every product was handled.
+    DidNotFinish,
+}
+
+impl fmt::Display for Violation {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Violation::BoxWithNothingHeld => write!(f, "chose the box with nothing in the cup"),
+            Violation::NotSelected { product } => {
+                write!(f, "chose {product}, which the order does not select")
+            }
+            Violation::AlreadyInSlot { product } => {
+                write!(f, "chose {product}, which is already in its slot")
+            }
+            Violation::LabelWhenPicking { product, label } => {
+                write!(f, "gave {product} label {label} when picking it")
+            }
+            Violation::ProductWhileHolding { chosen, held } => {
+                write!(f, "chose {chosen} instead of the box while holding {held}")
+            }
+            Violation::WrongSlot {
+                product,
+                label,
+                slot,
+                expected,
+            } => write!(
+                f,
+                "would put {product} in label {label}, the order says {slot} (label {expected})"
+            ),
+            Violation::OutOfSequence {
+                stage,
+                chosen,
+                label,
+                expected,
+                expected_label,
+            } => write!(
+                f,
+                "{stage}: chose {} with label {label}, the demonstrations {} {expected} with label {expected_label}",
+                chosen.as_deref().unwrap_or("the box"),
+                match stage {
+                    Stage::Picking => "pick",
+                    Stage::Placing => "place",
+                },
+            ),
+            Violation::DidNotFinish => {
+                write!(f, "did not finish within one pick per product")
+            }
+        }
+    }
+}
+
+/// What happened to one selected product.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProductReport {
+    pub product: String,
+    pub slot: String,
+    /// Wall-clock seconds spent planning (IK, checks, RRT) for this product.
+    pub planning_s: f64,
+    /// Simulated (or real) seconds of motion for this product.
+    pub execution_s: f64,
+    /// Distance of the product's centre from its slot goal at the end.
+    pub error_m: Option<f64>,
+    #[serde(flatten)]
+    pub outcome: Outcome,
+}
+
+/// Planning times, microseconds of wall clock.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Timing {
+    /// Per decision of what to handle next (the reasoner, or the expert's
+    /// sequence rule).
+    pub decision_us: Vec<f64>,
+    /// Per sub-goal: finding it and planning the motion to it.
+    pub subgoal_us: Vec<f64>,
+    /// Learned planner only: one sub-goal planner call plus the first
+    /// dynamics policy call of its rollout (sub-goals with a rollout).
+    pub network_us: Vec<f64>,
+}
+
+/// The result of packing one order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Report {
+    pub planner: PlannerKind,
+    pub products: Vec<ProductReport>,
+    /// Every present selected product is packed, nothing collided and no
+    /// decision broke the order.
+    pub complete: bool,
+    /// Contacts the world reported.
+    pub collisions: Vec<Contact>,
+    /// Simulated (or real) seconds at the end.
+    pub time_s: f64,
+    /// Learned planner: stages handed to RRT-Connect, and why.
+    pub fallbacks: Vec<Fallback>,
+    /// Learned planner: a decision that broke the order (the arm stopped).
+    pub violations: Vec<Violation>,
+    #[serde(skip)]
+    pub timing: Timing,
+}
+
+impl Report {
+    /// The first reason the package is not complete, for people.
+    pub fn first_problem(&self) -> Option<String> {
+        let failed = self.products.iter().find_map(|p| match &p.outcome {
+            Outcome::Failed(why) => Some(format!("{}: {why}", p.product)),
+            Outcome::NotAttempted => Some(format!("{}: not attempted", p.product)),
+            _ => None,
+        });
+        self.violations
+            .first()
+            .map(|v| format!("the reasoner {v}"))
+            .or(failed)
+            .or_else(|| self.collisions.first().map(|c| format!("collision: {c}")))
+    }
+}
+
+impl Serialize for Body {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl Serialize for Contact {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut st = s.serialize_struct("Contact", 3)?;
+        st.serialize_field("time", &self.time)?;
+        st.serialize_field("a", &self.a)?;
+        st.serialize_field("b", &self.b)?;
+        st.end()
+    }
+}

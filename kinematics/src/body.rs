@@ -1,0 +1,305 @@
+//! The one collision description of a cell, shared by the planner's
+//! checker (`packwright-motion`) and the simulator (`packwright-sim`):
+//! the arm's parts (every link's shapes and the suction cup), which part
+//! pairs are never checked, and the fixtures (the table, each box's floor
+//! and walls). Both build their geometry from these functions, so a motion
+//! the planner calls free meets the same bodies in the simulator; the
+//! planner only adds [`PADDING`] around the arm as a safety margin.
+//!
+//! parry works in f32 with glam types; [`pose`] and [`vector`] are the
+//! conversion from the robot model's f64 nalgebra types.
+
+use crate::{Arm, DOF, Joints, Shape};
+use nalgebra::{Isometry3, Point3, Vector3};
+use packwright_interface::scene::CellScene;
+use packwright_interface::world::Body;
+use parry3d::math::{Pose, Vector};
+use parry3d::query;
+use parry3d::shape::SharedShape;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Radius of the suction cup, metres.
+pub const CUP_RADIUS: f64 = 0.02;
+/// The cup's body stops this far above the tool tip (metres), so that the
+/// tip reaching a product's top face is not a collision.
+pub const CUP_SHORT: f64 = 0.005;
+/// Thickness of a box's walls and floor, metres.
+pub const BOX_WALL: f64 = 0.004;
+/// Thickness of the table slab (its top is z = 0), metres.
+pub const TABLE_THICKNESS: f64 = 0.1;
+/// The planner's margin around the arm's parts, metres.
+pub const PADDING: f64 = 0.01;
+/// The planner's margin around a held product, metres (it must go down
+/// into a slot that fits it with little room).
+pub const HELD_PADDING: f64 = 0.003;
+/// The cup's index among the arm parts (0..=6 are the links, 0 the base).
+pub const CUP: usize = DOF + 1;
+
+/// A robot-model pose as a parry pose.
+pub fn pose(iso: &Isometry3<f64>) -> Pose {
+    let t = iso.translation.vector;
+    let q = iso.rotation.quaternion();
+    Pose::from_parts(
+        vector(&t),
+        parry3d::glamx::Quat::from_xyzw(q.i as f32, q.j as f32, q.k as f32, q.w as f32).normalize(),
+    )
+}
+
+/// A robot-model vector (or a point's coordinates) as a parry vector.
+pub fn vector(v: &Vector3<f64>) -> Vector {
+    Vector::new(v.x as f32, v.y as f32, v.z as f32)
+}
+
+fn point(p: &Point3<f64>) -> Vector {
+    vector(&p.coords)
+}
+
+/// One collision primitive of the arm, rigidly attached to a part.
+#[derive(Clone)]
+pub struct ArmPart {
+    /// 0..=6 the links (0 the fixed base link), [`CUP`] the cup (on the
+    /// last link).
+    pub part: usize,
+    /// Pose in the link's frame.
+    pub local: Isometry3<f64>,
+    pub shape: SharedShape,
+}
+
+impl ArmPart {
+    /// The link that carries this part (the cup rides on the last link).
+    pub fn link(&self) -> usize {
+        self.part.min(DOF)
+    }
+}
+
+/// The arm's parts, each grown by `padding`: every link's capsules and
+/// cuboids, and the cup, a capsule of radius [`CUP_RADIUS`] + `padding` down
+/// the flange's z axis whose rounded end stays [`CUP_SHORT`] above the tool
+/// tip whatever the padding.
+pub fn arm_parts(arm: &Arm, suction: f64, padding: f64) -> Vec<ArmPart> {
+    let mut parts = Vec::new();
+    for (i, link) in arm.links.iter().enumerate() {
+        for s in &link.shapes {
+            parts.push(match s {
+                Shape::Capsule { a, b, radius } => ArmPart {
+                    part: i,
+                    local: Isometry3::identity(),
+                    shape: SharedShape::capsule(point(a), point(b), (radius + padding) as f32),
+                },
+                Shape::Cuboid { pose, half } => {
+                    let h = half.add_scalar(padding);
+                    ArmPart {
+                        part: i,
+                        local: *pose,
+                        shape: SharedShape::cuboid(h.x as f32, h.y as f32, h.z as f32),
+                    }
+                }
+            });
+        }
+    }
+    let radius = CUP_RADIUS + padding;
+    let end = (suction - CUP_SHORT - radius).max(0.0);
+    parts.push(ArmPart {
+        part: CUP,
+        local: arm.flange,
+        shape: SharedShape::capsule(
+            Vector::ZERO,
+            Vector::new(0.0, 0.0, end as f32),
+            radius as f32,
+        ),
+    });
+    parts
+}
+
+/// Whether parts `a` and `b` are the same link or neighbours along the
+/// chain (the cup's neighbour is the last link): never checked.
+pub fn adjacent(a: usize, b: usize) -> bool {
+    a.abs_diff(b) <= 1
+}
+
+/// What a part is called in contacts.
+pub fn part_body(arm: &Arm, part: usize) -> Body {
+    match arm.links.get(part) {
+        Some(link) if part != CUP => Body::Link(link.name.clone()),
+        _ if part == CUP => Body::Cup,
+        _ => Body::Link(format!("link{part}")),
+    }
+}
+
+/// Non-adjacent part pairs that touch by construction, never checked:
+/// those in contact at the zero pose, or in at least 90% of 256 seeded
+/// random configurations, with the planner's padding (on a real arm they
+/// are neighbours whose simplified shapes overlap). Sorted `(low, high)`.
+pub fn touching_pairs(arm: &Arm, suction: f64) -> Vec<(usize, usize)> {
+    let parts = arm_parts(arm, suction, PADDING);
+    let base = Isometry3::identity();
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let samples = 256usize;
+    let n = CUP + 1;
+    let mut counts = vec![0usize; n * n];
+    let mut allowed = Vec::new();
+    for k in 0..=samples {
+        let q: Joints = if k == 0 {
+            [0.0; DOF]
+        } else {
+            std::array::from_fn(|j| {
+                let l = &arm.limits[j];
+                let (lo, hi) = (
+                    l.lower.max(-std::f64::consts::PI),
+                    l.upper.min(std::f64::consts::PI),
+                );
+                if lo < hi {
+                    rng.random_range(lo..=hi)
+                } else {
+                    lo
+                }
+            })
+        };
+        let links = arm.link_poses(&base, &q);
+        let poses: Vec<Pose> = parts
+            .iter()
+            .map(|p| pose(&(links[p.link()] * p.local)))
+            .collect();
+        let mut hits = Vec::new();
+        for (i, a) in parts.iter().enumerate() {
+            for (j, b) in parts.iter().enumerate().skip(i + 1) {
+                let (la, lb) = (a.part.min(b.part), a.part.max(b.part));
+                if adjacent(la, lb) || hits.contains(&(la, lb)) {
+                    continue;
+                }
+                if intersects(&poses[i], &a.shape, &poses[j], &b.shape) {
+                    hits.push((la, lb));
+                }
+            }
+        }
+        for pair in hits {
+            if k == 0 {
+                allowed.push(pair);
+            } else {
+                counts[pair.0 * n + pair.1] += 1;
+            }
+        }
+    }
+    for i in 0..n {
+        for j in i + 1..n {
+            if counts[i * n + j] * 10 >= samples * 9 && !allowed.contains(&(i, j)) {
+                allowed.push((i, j));
+            }
+        }
+    }
+    allowed.sort_unstable();
+    allowed
+}
+
+/// Whether two shapes intersect. An unsupported pair cannot happen with
+/// capsules and cuboids; it counts as a collision, to stay on the safe side.
+pub fn intersects(p1: &Pose, s1: &SharedShape, p2: &Pose, s2: &SharedShape) -> bool {
+    query::intersection_test(p1, s1.as_ref(), p2, s2.as_ref()).map_or(true, |i| i.intersecting)
+}
+
+/// Who a fixture belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Owner {
+    Table,
+    /// Index into [`CellScene::boxes`].
+    Box(usize),
+}
+
+/// A fixed cuboid of the cell.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fixture {
+    pub owner: Owner,
+    /// World position of the centre.
+    pub centre: [f64; 3],
+    pub half: [f64; 3],
+}
+
+impl Fixture {
+    /// What the fixture is called in contacts.
+    pub fn body(&self, cell: &CellScene) -> Body {
+        match self.owner {
+            Owner::Table => Body::Table,
+            Owner::Box(k) => Body::Box(
+                cell.boxes
+                    .get(k)
+                    .map_or_else(String::new, |b| b.name.clone()),
+            ),
+        }
+    }
+}
+
+/// The cell's fixtures: the table (a [`TABLE_THICKNESS`] slab whose top is
+/// z = 0, at least 4 m × 4 m, centred under the base, the pending area and
+/// the boxes) and each box's floor (its top at z = 0, the table top: the
+/// specification puts the floor at table height) and four walls inside the
+/// outside footprint, from z = 0 to the box height, all [`BOX_WALL`] thick.
+pub fn fixtures(cell: &CellScene) -> Vec<Fixture> {
+    let mut lo = [cell.base[0], cell.base[1]];
+    let mut hi = lo;
+    let mut grow = |x: f64, y: f64| {
+        lo = [lo[0].min(x), lo[1].min(y)];
+        hi = [hi[0].max(x), hi[1].max(y)];
+    };
+    grow(cell.pending.0[0], cell.pending.0[1]);
+    grow(cell.pending.1[0], cell.pending.1[1]);
+    for b in &cell.boxes {
+        grow(b.centre[0] - b.size[0] / 2.0, b.centre[1] - b.size[1] / 2.0);
+        grow(b.centre[0] + b.size[0] / 2.0, b.centre[1] + b.size[1] / 2.0);
+    }
+    let half = |k: usize| ((hi[k] - lo[k]) / 2.0 + 0.5).max(2.0);
+    let mut out = vec![Fixture {
+        owner: Owner::Table,
+        centre: [
+            (lo[0] + hi[0]) / 2.0,
+            (lo[1] + hi[1]) / 2.0,
+            -TABLE_THICKNESS / 2.0,
+        ],
+        half: [half(0), half(1), TABLE_THICKNESS / 2.0],
+    }];
+    for (k, b) in cell.boxes.iter().enumerate() {
+        let [w, d, h] = b.size;
+        let [cx, cy] = b.centre;
+        let t = BOX_WALL / 2.0;
+        let parts = [
+            ([0.0, 0.0, -t], [w / 2.0, d / 2.0, t]),
+            ([-w / 2.0 + t, 0.0, h / 2.0], [t, d / 2.0, h / 2.0]),
+            ([w / 2.0 - t, 0.0, h / 2.0], [t, d / 2.0, h / 2.0]),
+            (
+                [0.0, -d / 2.0 + t, h / 2.0],
+                [w / 2.0 - BOX_WALL, t, h / 2.0],
+            ),
+            (
+                [0.0, d / 2.0 - t, h / 2.0],
+                [w / 2.0 - BOX_WALL, t, h / 2.0],
+            ),
+        ];
+        for (at, half) in parts {
+            out.push(Fixture {
+                owner: Owner::Box(k),
+                centre: [cx + at[0], cy + at[1], at[2]],
+                half,
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_cup_ends_short_of_the_tip_whatever_the_padding() {
+        let arm = Arm::ur10();
+        for padding in [0.0, PADDING] {
+            let parts = arm_parts(&arm, 0.1, padding);
+            let cup = parts.iter().find(|p| p.part == CUP).expect("a cup");
+            let capsule = cup.shape.as_capsule().expect("a capsule");
+            let end = f64::from(capsule.segment.b.z + capsule.radius);
+            assert!((end - (0.1 - CUP_SHORT)).abs() < 1e-6, "{end}");
+        }
+        assert!(adjacent(CUP, DOF) && !adjacent(CUP, DOF - 1));
+        assert_eq!(part_body(&arm, CUP), Body::Cup);
+    }
+}

@@ -1,0 +1,92 @@
+//! A 6-axis arm: its joint chain (from URDF), limits, collision shapes, and
+//! kinematics (`kinematics.rs`). The built-in UR10 is `ur10.urdf`, written
+//! from the public DH parameters and embedded in the binary.
+//!
+//! [`body`] is the one collision description of a cell (the arm's parts,
+//! the cup, the table and the boxes, which part pairs are never checked):
+//! the planner's checker and the simulator both build their geometry from
+//! it.
+
+pub mod body;
+mod error;
+mod kinematics;
+mod urdf;
+
+pub use error::UrdfError;
+pub use kinematics::*;
+pub use packwright_interface::joints::{DOF, Joints, Limits};
+pub use urdf::{DEFAULT_ACCELERATION, DEFAULT_JERK, from_urdf};
+
+use nalgebra::{Isometry3, Point3, Unit, Vector3};
+
+/// A collision primitive, in its link's frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Shape {
+    /// The segment `a`–`b` swept by a ball of `radius`.
+    Capsule {
+        a: Point3<f64>,
+        b: Point3<f64>,
+        radius: f64,
+    },
+    /// A box with half extents `half`, placed at `pose`.
+    Cuboid {
+        pose: Isometry3<f64>,
+        half: Vector3<f64>,
+    },
+}
+
+/// One rigid link and its collision shapes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Link {
+    pub name: String,
+    pub shapes: Vec<Shape>,
+}
+
+/// The DH lengths of a Universal Robots arm (metres), which admit a
+/// closed-form inverse kinematics.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UrGeometry {
+    pub d1: f64,
+    pub a2: f64,
+    pub a3: f64,
+    pub d4: f64,
+    pub d5: f64,
+    pub d6: f64,
+}
+
+/// A serial 6-axis arm.
+///
+/// Invariants: `links.len() == DOF + 1` (`links[0]` is the fixed base link,
+/// `links[i + 1]` moves with joint `i`); every joint is revolute; `flange`
+/// is the tool flange in the last link's frame (z out of the flange).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Arm {
+    pub name: String,
+    /// Each joint's frame in its parent link's frame (the URDF origin).
+    pub origins: [Isometry3<f64>; DOF],
+    /// Each joint's rotation axis in its own frame.
+    pub axes: [Unit<Vector3<f64>>; DOF],
+    pub limits: [Limits; DOF],
+    pub links: Vec<Link>,
+    pub flange: Isometry3<f64>,
+    /// `Some` when the chain has the UR geometry (closed-form IK).
+    pub ur: Option<UrGeometry>,
+}
+
+/// The built-in UR10 description.
+pub const UR10_URDF: &str = include_str!("ur10.urdf");
+
+impl Arm {
+    /// The built-in UR10.
+    pub fn ur10() -> Arm {
+        match from_urdf(UR10_URDF) {
+            Ok(arm) => arm,
+            // The embedded file is tested; this cannot happen in a release.
+            Err(e) => unreachable!("the built-in UR10 description is invalid: {e}"),
+        }
+    }
+
+    pub fn within_limits(&self, q: &Joints) -> bool {
+        packwright_interface::joints::within(&self.limits, q)
+    }
+}

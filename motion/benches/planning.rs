@@ -1,0 +1,97 @@
+//! Collision checks and RRT-Connect on the UR10 in a bench cell.
+//!
+//! `cargo bench -p packwright-runtime --bench planning`
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+use common::bench_cell;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use nalgebra::{Isometry3, Point3};
+use packwright_kinematics::Arm;
+use packwright_motion::collision::{Checker, ProductBody};
+use packwright_motion::execute::{Load, reach};
+use packwright_motion::rrt::{self, Query, RrtConfig};
+use std::f64::consts::FRAC_PI_2;
+use std::hint::black_box;
+
+fn bench(c: &mut Criterion) {
+    let arm = Arm::ur10();
+    let cell = bench_cell();
+    let mut checker = Checker::new(&arm, &cell);
+    let cubes: Vec<ProductBody> = [
+        [0.5, -0.2],
+        [0.62, -0.2],
+        [0.74, -0.2],
+        [0.56, -0.38],
+        [0.68, -0.38],
+    ]
+    .iter()
+    .enumerate()
+    .map(|(i, at)| ProductBody {
+        name: format!("P{i}"),
+        centre: [at[0], at[1], 0.025],
+        size: [0.05; 3],
+        yaw: 0.0,
+    })
+    .collect();
+    checker.set_products(&cubes);
+    let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
+    let at = |x: f64, y: f64, z: f64| {
+        reach(
+            &arm,
+            &checker,
+            &Isometry3::identity(),
+            Point3::new(x, y, z),
+            0.0,
+            0.1,
+            &ready,
+            Load::FREE,
+        )
+        .expect("reachable")
+    };
+    let pick = at(0.62, -0.2, 0.2);
+    let place = at(0.0, 0.6, 0.2);
+    c.bench_function("collision check (arm, 5 products, box)", |b| {
+        b.iter(|| checker.check(black_box(&pick), None, None))
+    });
+    c.bench_function("swept check pick -> place (1 degree steps)", |b| {
+        b.iter(|| checker.check_motion(black_box(&pick), black_box(&place), None, None))
+    });
+    let query = Query {
+        checker: &checker,
+        limits: &arm.limits,
+        held: None,
+        ignore: None,
+    };
+    // A post between two poses forces a real search.
+    let mut blocked = checker.clone();
+    let mut with_post = cubes.clone();
+    with_post.push(ProductBody {
+        name: "post".into(),
+        centre: [0.49, -0.34, 0.15],
+        size: [0.05, 0.05, 0.3],
+        yaw: 0.0,
+    });
+    blocked.set_products(&with_post);
+    let a = at(0.3, -0.52, 0.15);
+    let b2 = at(0.59, -0.1, 0.15);
+    let blocked_query = Query {
+        checker: &blocked,
+        limits: &arm.limits,
+        held: None,
+        ignore: None,
+    };
+    let mut group = c.benchmark_group("rrt-connect");
+    group.sample_size(20);
+    group.bench_function("pick -> place", |b| {
+        b.iter(|| rrt::plan(&query, pick, place, &RrtConfig::default()))
+    });
+    group.bench_function("around a post", |b| {
+        b.iter(|| rrt::plan(&blocked_query, a, b2, &RrtConfig::default()))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

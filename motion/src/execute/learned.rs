@@ -1,0 +1,483 @@
+//! The learned loop (README, "Learning"): at the start of each stage the
+//! reasoner chooses (a product or the box, and the label) from the
+//! products' positions alone; the sub-goal planner proposes each of the
+//! stage's three sub-goals; the dynamics policy steps towards it (at most
+//! [`MAX_POLICY_STEPS`] steps of at most 5 degrees, the wrist keeping the
+//! cup down). A rollout that does not reach its sub-goal, or whose motion
+//! would collide, hands the rest of the stage to RRT-Connect (a
+//! [`Fallback`]). A decision that breaks the order stops the arm (a
+//! [`Violation`]).
+
+use super::reasoner::{f32s, goal_input, graph, in_slot};
+use super::station::{Clock, Connect, Load, RAISE_STEP, SUCCESS_RADIUS, Station, Unchecked};
+use super::{checked_samples, expected_next};
+use crate::collision::Held;
+use crate::expert::{SubGoal, Suction};
+use nalgebra::Isometry3;
+use packwright_interface::outcome::{
+    Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, Violation,
+};
+use packwright_interface::record;
+use packwright_interface::{OrderTask, Policy, World};
+use packwright_kinematics::{Arm, Joints};
+use std::time::Instant;
+
+/// Most dynamics-policy steps per sub-goal.
+pub const MAX_POLICY_STEPS: usize = 30;
+/// A sub-goal where the suction switches (the cup on a product's top
+/// face, a release in a slot) is reached when the cup tip is this close (m).
+pub const REACHED: f64 = 0.002;
+/// A via point (hover, lift, approach, above the slot) is reached when the
+/// cup tip is this close (m).
+pub const REACHED_VIA: f64 = 0.01;
+
+/// The suction switch at each of a stage's sub-goals.
+fn switches(stage: Stage) -> [Suction; 3] {
+    match stage {
+        Stage::Picking => [Suction::Keep, Suction::On, Suction::Keep],
+        Stage::Placing => [Suction::Keep, Suction::Keep, Suction::Off],
+    }
+}
+
+/// `q` moved by `step` (base, shoulder, elbow), the wrist turned so that the
+/// cup keeps pointing down with the same yaw (UR-type wrists); `None` when
+/// that does not hold for this arm or leaves the joint limits.
+pub fn cup_down(arm: &Arm, base: &Isometry3<f64>, q: &Joints, step: [f64; 3]) -> Option<Joints> {
+    let mut next = *q;
+    next[0] += step[0];
+    next[1] += step[1];
+    next[2] += step[2];
+    next[3] -= step[1] + step[2];
+    next[5] += step[0];
+    let before = arm.flange_pose(base, q).rotation;
+    let after = arm.flange_pose(base, &next).rotation;
+    let kept = before.angle_to(&after) < 1e-6;
+    (kept && arm.within_limits(&next)).then_some(next)
+}
+
+/// The dynamics policy's steps from `start` towards the cup-tip position
+/// `goal`, with forward kinematics, as the learned loop takes them: at
+/// most [`MAX_POLICY_STEPS`], each `action(q, delta)` (base, shoulder,
+/// elbow, radians; delta = goal − cup tip) scaled down to 5 degrees, the
+/// wrist keeping the cup down; until the tip is within `tolerance`. The
+/// joints after each step, or why the goal was not reached. DAgger's
+/// rollouts step through this too.
+pub fn policy_steps(
+    arm: &Arm,
+    base: &Isometry3<f64>,
+    suction: f64,
+    start: Joints,
+    goal: [f64; 3],
+    tolerance: f64,
+    action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
+) -> Result<Vec<Joints>, Shortfall> {
+    let mut q = start;
+    let mut steps = Vec::new();
+    loop {
+        let tip: [f64; 3] = arm.tool_tip(base, &q, suction).coords.into();
+        let delta: [f64; 3] = std::array::from_fn(|j| goal[j] - tip[j]);
+        let away = delta.iter().map(|d| d * d).sum::<f64>().sqrt();
+        if away <= tolerance {
+            return Ok(steps);
+        }
+        if steps.len() == MAX_POLICY_STEPS {
+            return Err(Shortfall::Short {
+                steps: MAX_POLICY_STEPS,
+                distance_m: away,
+            });
+        }
+        let step = record::clip(action(&q, delta).map(f64::from));
+        q = cup_down(arm, base, &q, step).ok_or(Shortfall::Limits)?;
+        steps.push(q);
+    }
+}
+
+/// What stopped a learned run early.
+enum Halt {
+    Violation(Violation),
+    Failed(Failure),
+}
+
+impl From<Failure> for Halt {
+    fn from(f: Failure) -> Halt {
+        Halt::Failed(f)
+    }
+}
+
+/// Why the run stopped: a decision that broke the order, or a failure
+/// while handling the product in row `row` of the report.
+enum Stopped {
+    Violation(Violation),
+    Failed { row: usize, why: Failure },
+}
+
+/// One stage's inputs.
+struct StagePlan<'l> {
+    stage: Stage,
+    product: &'l str,
+    /// The selected feature: the product's centre (picking) or its box's
+    /// top centre (placing).
+    feature: [f64; 3],
+    label: usize,
+    /// Picking: the sensed top face, where the cup's descent stops.
+    contact: Option<f64>,
+    load: Load<'l>,
+}
+
+/// The learned loop over the shared stepping primitives.
+struct Learned<'a, W: World> {
+    station: Station<'a, W>,
+    policy: &'a dyn Policy,
+    seed: u64,
+    fallbacks: Vec<Fallback>,
+}
+
+impl<W: World> Learned<'_, W> {
+    /// The dynamics policy's motion from `start` to `goal`: the checked
+    /// commands, or why not. The steps' end point is joined straight when
+    /// that is free, else through every step. `first_action_us` gets the
+    /// time of the first policy call.
+    fn rollout(
+        &self,
+        start: Joints,
+        goal: [f64; 3],
+        tolerance: f64,
+        load: Load,
+        first_action_us: &mut Option<f64>,
+    ) -> Result<Vec<Joints>, Shortfall> {
+        let s = &self.station;
+        let steps = policy_steps(
+            s.arm,
+            &s.base,
+            s.task.cell.suction,
+            start,
+            goal,
+            tolerance,
+            &mut |q, delta| {
+                let called = Instant::now();
+                let action = self
+                    .policy
+                    .action(f32s(delta), [q[0] as f32, q[1] as f32, q[2] as f32]);
+                first_action_us.get_or_insert(called.elapsed().as_secs_f64() * 1e6);
+                action
+            },
+        )?;
+        let Some(&q) = steps.last() else {
+            return Ok(Vec::new());
+        };
+        checked_samples(s.arm, &s.checker, start, &[q], load)
+            .or_else(|_| checked_samples(s.arm, &s.checker, start, &steps, load))
+            .map_err(|e| match e {
+                Unchecked::Collides(hit) => Shortfall::Collides { hit },
+                Unchecked::Smoothing(_) => Shortfall::Limits,
+            })
+    }
+
+    /// The rest of a stage's sub-goal `k` (from 0) by RRT-Connect.
+    fn fall_back(
+        &self,
+        k: usize,
+        start: Joints,
+        goal: SubGoal,
+        load: Load,
+        ceiling: f64,
+    ) -> Result<Vec<Joints>, Failure> {
+        let s = &self.station;
+        let target = s.solve(&goal, k + 1, &start, 0.0, load, ceiling)?;
+        let path = s.connect(Connect::Rrt { seed: self.seed }, k + 1, start, target, load)?;
+        s.checked(k + 1, start, path.get(1..).unwrap_or(&[]), load)
+    }
+
+    /// One stage with learned sub-goals and motions: the sub-goals used.
+    fn stage(&mut self, plan: &StagePlan) -> Result<[[f64; 3]; 3], Failure> {
+        let mut fallen = false;
+        let mut goals = [[0.0; 3]; 3];
+        for (k, switch) in switches(plan.stage).into_iter().enumerate() {
+            let start = self.station.world.observe().joints;
+            let started = Instant::now();
+            let tool = f32s(self.station.tip(&start));
+            let mut goal = self
+                .policy
+                .subgoal(f32s(plan.feature), tool, plan.label, k)
+                .map(f64::from);
+            // A guarded contact: the cup meets the top face where the
+            // product is sensed (its centre plus half its height), as a
+            // vacuum sensor would stop the descent; x and y stay learned.
+            if let (Suction::On, Some(top)) = (switch, plan.contact) {
+                goal[2] = top;
+            }
+            goals[k] = goal;
+            let subgoal_us = started.elapsed().as_secs_f64() * 1e6;
+            // A release the wrist cannot reach is raised, as the expert's
+            // is, up to the previous sub-goal's height.
+            let ceiling = if switch == Suction::Off && k > 0 {
+                goals[k - 1][2]
+            } else {
+                goal[2]
+            };
+            let rolled = (!fallen).then(|| {
+                let tolerance = if switch == Suction::Keep {
+                    REACHED_VIA
+                } else {
+                    REACHED
+                };
+                let mut first_action_us = None;
+                // The first attempt's shortfall is the one reported.
+                let mut rolled =
+                    self.rollout(start, goal, tolerance, plan.load, &mut first_action_us);
+                let mut raised = 1;
+                while rolled.is_err() && goal[2] + RAISE_STEP * f64::from(raised) <= ceiling {
+                    let higher = [goal[0], goal[1], goal[2] + RAISE_STEP * f64::from(raised)];
+                    if let Ok(samples) =
+                        self.rollout(start, higher, tolerance, plan.load, &mut first_action_us)
+                    {
+                        rolled = Ok(samples);
+                    }
+                    raised += 1;
+                }
+                if let Some(action_us) = first_action_us {
+                    self.station.timing.network_us.push(subgoal_us + action_us);
+                }
+                rolled
+            });
+            let samples = match rolled {
+                Some(Ok(samples)) => samples,
+                other => {
+                    if let Some(Err(why)) = other {
+                        self.fallbacks.push(Fallback {
+                            product: plan.product.to_owned(),
+                            stage: plan.stage,
+                            subgoal: k + 1,
+                            why,
+                        });
+                    }
+                    fallen = true;
+                    let target = SubGoal {
+                        tip: goal,
+                        suction: switch,
+                    };
+                    self.fall_back(k, start, target, plan.load, ceiling)?
+                }
+            };
+            let elapsed = started.elapsed().as_secs_f64();
+            self.station.timing.subgoal_us.push(elapsed * 1e6);
+            self.station.clock.planning_s += elapsed;
+            self.station.send(&samples, switch)?;
+        }
+        Ok(goals)
+    }
+
+    /// Backs off straight up to `above` (the learned "above the slot"
+    /// sub-goal) from the released product `name`.
+    fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<(), Failure> {
+        let started = Instant::now();
+        let load = Load {
+            held: None,
+            ignore: Some(name),
+        };
+        let s = &self.station;
+        let start = s.world.observe().joints;
+        let up = SubGoal {
+            tip: above,
+            suction: Suction::Keep,
+        };
+        let target = s.solve(&up, 1, &start, 0.0, load, above[2])?;
+        let samples = s.checked(1, start, &[target], load)?;
+        self.station.clock.planning_s += started.elapsed().as_secs_f64();
+        self.station.send(&samples, Suction::Keep)
+    }
+
+    /// The reasoner's decision, timed.
+    fn reason(
+        &mut self,
+        nodes: &[[f32; 4]],
+        goal_of: &dyn Fn(Option<usize>) -> [f32; 3],
+    ) -> packwright_interface::Choice {
+        let decided = Instant::now();
+        let choice = self.policy.reason(nodes, goal_of);
+        self.station
+            .timing
+            .decision_us
+            .push(decided.elapsed().as_secs_f64() * 1e6);
+        choice
+    }
+
+    /// Picks the product the reasoner chooses and places it where it says:
+    /// the product and slot handled, or why the run stops.
+    fn product(&mut self, rows: &mut [ProductReport]) -> Result<(), Stopped> {
+        let task = self.station.task;
+        let obs = self.station.world.observe();
+        let (nodes, which) = graph(task, &obs.products);
+        let choice = self.reason(&nodes, &|n| {
+            n.map_or([0.0; 3], |n| goal_input(task, &which, &obs.products, n))
+        });
+        let stop = Stopped::Violation;
+        let node = choice.node.ok_or(stop(Violation::BoxWithNothingHeld))?;
+        let p = which[node];
+        let product = task.products[p].name.clone();
+        let row = task
+            .assignment
+            .iter()
+            .position(|&(q, _)| q == p)
+            .ok_or_else(|| {
+                stop(Violation::NotSelected {
+                    product: product.clone(),
+                })
+            })?;
+        if in_slot(task, &obs.products, p) {
+            return Err(stop(Violation::AlreadyInSlot { product }));
+        }
+        if choice.label != 0 {
+            return Err(stop(Violation::LabelWhenPicking {
+                product,
+                label: choice.label,
+            }));
+        }
+        let s = task.assignment[row].1;
+        self.station.restart_clock();
+        let result = self.manipulate(p, s);
+        let period = self.station.world.control_period();
+        let after = self.station.world.observe();
+        let Clock { planning_s, steps } = self.station.restart_clock();
+        let report = &mut rows[row];
+        report.planning_s = planning_s;
+        report.execution_s = steps as f64 * period;
+        report.error_m = self.station.error_of(&after, p, s);
+        match result {
+            Ok(()) if report.error_m.is_some_and(|e| e <= SUCCESS_RADIUS) => {
+                report.outcome = Outcome::Packed;
+                Ok(())
+            }
+            Ok(()) => Err(Stopped::Failed {
+                row,
+                why: Failure::Misplaced {
+                    error_m: report.error_m.unwrap_or(f64::NAN),
+                },
+            }),
+            Err(Halt::Failed(why)) => Err(Stopped::Failed { row, why }),
+            Err(Halt::Violation(v)) => Err(Stopped::Violation(v)),
+        }
+    }
+
+    fn manipulate(&mut self, p: usize, s: usize) -> Result<(), Halt> {
+        let task = self.station.task;
+        let cell = &task.cell;
+        let spec = &task.products[p];
+        let name = spec.name.as_str();
+        let obs = self.station.world.observe();
+        self.station.sync_products(&obs);
+        let (centre, _) = obs.find(name).ok_or(Failure::Disappeared)?;
+        self.stage(&StagePlan {
+            stage: Stage::Picking,
+            product: name,
+            feature: centre,
+            label: 0,
+            contact: Some(centre[2] + spec.size[2] / 2.0),
+            load: Load {
+                held: None,
+                ignore: Some(name),
+            },
+        })?;
+        // Placing: the reasoner sees the held product raised.
+        let obs = self.station.world.observe();
+        let (nodes, which) = graph(task, &obs.products);
+        let goal = f32s(task.goal(p, s));
+        let choice = self.reason(&nodes, &|_| goal);
+        if let Some(n) = choice.node {
+            return Err(Halt::Violation(Violation::ProductWhileHolding {
+                chosen: task.products[which[n]].name.clone(),
+                held: name.to_owned(),
+            }));
+        }
+        if choice.label != s + 1 {
+            return Err(Halt::Violation(Violation::WrongSlot {
+                product: name.to_owned(),
+                label: choice.label,
+                slot: cell.slots[s].name.clone(),
+                expected: s + 1,
+            }));
+        }
+        let held = Held {
+            name: name.to_owned(),
+            size: spec.size,
+            in_flange: Isometry3::translation(0.0, 0.0, cell.suction + spec.size[2] / 2.0),
+        };
+        self.station.sync_products(&obs);
+        let goals = self.stage(&StagePlan {
+            stage: Stage::Placing,
+            product: name,
+            feature: task.box_top(s),
+            label: choice.label,
+            contact: None,
+            load: Load {
+                held: Some(&held),
+                ignore: None,
+            },
+        })?;
+        self.retreat(goals[1], name)?;
+        Ok(())
+    }
+}
+
+/// Packs `task` with `policy`; RRT-Connect (seeded with `seed`) for
+/// fallbacks.
+pub(super) fn run<W: World>(
+    world: &mut W,
+    arm: &Arm,
+    task: &OrderTask,
+    policy: &dyn Policy,
+    seed: u64,
+) -> Report {
+    let mut runner = Learned {
+        station: Station::new(world, arm, task),
+        policy,
+        seed,
+        fallbacks: Vec::new(),
+    };
+    let first = runner.station.world.observe();
+    let mut rows: Vec<ProductReport> = task
+        .assignment
+        .iter()
+        .map(|&(p, s)| {
+            let mut row = runner.station.row(p, s);
+            row.error_m = runner.station.error_of(&first, p, s);
+            row.outcome = match row.error_m {
+                None => Outcome::Waiting,
+                Some(e) if e <= SUCCESS_RADIUS => Outcome::AlreadyPacked,
+                Some(_) => Outcome::NotAttempted,
+            };
+            row
+        })
+        .collect();
+    let mut stop = None;
+    for _ in 0..task.assignment.len() {
+        let obs = runner.station.world.observe();
+        // Done when no selected, present product is out of its slot.
+        if expected_next(task, &obs.products).is_none() {
+            break;
+        }
+        if let Err(halt) = runner.product(&mut rows) {
+            stop = Some(halt);
+            break;
+        }
+    }
+    let mut violations = Vec::new();
+    let mut collisions = Vec::new();
+    match stop {
+        Some(Stopped::Violation(v)) => violations.push(v),
+        Some(Stopped::Failed { row, why }) => {
+            if let Failure::Collision { contact } = &why {
+                collisions.push(contact.clone());
+            }
+            rows[row].outcome = Outcome::Failed(why);
+        }
+        None => {}
+    }
+    let mut report = runner
+        .station
+        .finish(PlannerKind::Learned, rows, collisions);
+    report.fallbacks = std::mem::take(&mut runner.fallbacks);
+    report.complete &= violations.is_empty();
+    report.violations = violations;
+    report
+}

@@ -1,0 +1,84 @@
+//! The execution loops: observe, choose the next product, plan each stage's
+//! three sub-goals, check the motion, smooth it with Ruckig at the control
+//! rate, and drive the world.
+//!
+//! Planners ([`Planner`]):
+//! - `Expert`: the scripted demonstrator; straight joint-space motions
+//!   between the inverse-kinematics solutions of the sub-goals, and the
+//!   demonstrated sequence rule (inventory order) for what comes next;
+//! - `Rrt`: the same sub-goal poses joined by RRT-Connect (the paper's
+//!   RM + RRT-Connect baseline);
+//! - `Learned`: a [`Policy`]'s reasoner, sub-goal planner and dynamics
+//!   policy, with RRT-Connect for the rest of a stage when a rollout falls
+//!   short (a counted fallback).
+//!
+//! Both loops ([`scripted`], [`learned`]) are built on the same stepping
+//! primitives ([`station`]: inverse kinematics, connecting, checking,
+//! sending). Every smoothed 2 ms command is collision-checked (parry, at
+//! joint steps of at most 1 degree) before it is sent; a plan that would
+//! collide or an unreachable sub-goal is reported for that product
+//! ([`Failure`]) and the arm stops where it is. Observations are only
+//! products' positions: what is packed or missing is inferred from them.
+
+mod learned;
+mod reasoner;
+mod scripted;
+mod station;
+
+pub use learned::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps};
+pub use reasoner::{expected_next, reasoner_trial};
+pub use station::{HOME_HEIGHT, Load, Unchecked, checked_samples, home, reach};
+
+use packwright_interface::outcome::{Failure, PlannerKind, Report};
+use packwright_interface::record::MotionLog;
+use packwright_interface::{OrderTask, Policy, World};
+use packwright_kinematics::Arm;
+
+/// How to pack.
+#[derive(Clone, Copy)]
+pub enum Planner<'a> {
+    /// The scripted expert.
+    Expert,
+    /// The expert's sub-goals joined by RRT-Connect, seeded.
+    Rrt { seed: u64 },
+    /// A trained policy; RRT-Connect (seeded) for fallbacks.
+    Learned { policy: &'a dyn Policy, seed: u64 },
+}
+
+impl Planner<'_> {
+    pub fn kind(&self) -> PlannerKind {
+        match self {
+            Planner::Expert => PlannerKind::Expert,
+            Planner::Rrt { .. } => PlannerKind::Rrt,
+            Planner::Learned { .. } => PlannerKind::Learned,
+        }
+    }
+}
+
+/// Packs `task` in `world` with `arm`. The world's arm starts wherever it
+/// is; products are found by name in the observations.
+pub fn run<W: World>(world: &mut W, arm: &Arm, task: &OrderTask, planner: &Planner) -> Report {
+    match *planner {
+        Planner::Expert => scripted::run(world, arm, task, station::Connect::Straight, None),
+        Planner::Rrt { seed } => {
+            scripted::run(world, arm, task, station::Connect::Rrt { seed }, None)
+        }
+        Planner::Learned { policy, seed } => learned::run(world, arm, task, policy, seed),
+    }
+}
+
+/// The expert's run, recording the sub-goals and actions into `log`
+/// (motion demonstrations).
+pub fn run_recorded<W: World>(
+    world: &mut W,
+    arm: &Arm,
+    task: &OrderTask,
+    log: &mut MotionLog,
+) -> Report {
+    scripted::run(world, arm, task, station::Connect::Straight, Some(log))
+}
+
+/// Whether a failure is a contact the world reported.
+pub fn is_collision(f: &Failure) -> bool {
+    matches!(f, Failure::Collision { .. })
+}

@@ -1,0 +1,260 @@
+//! The expert's and RRT-Connect's loop: the next product by the
+//! demonstrated sequence rule (inventory order), the expert's three
+//! sub-goals per stage, the inverse-kinematics branch nearest the current
+//! joints among the free ones, joined straight or by RRT-Connect; the
+//! expert's runs can be recorded as motion demonstrations.
+
+use super::station::{Clock, Connect, Load, SUCCESS_RADIUS, Station, distance};
+use crate::collision::Held;
+use crate::expert::{self, SubGoal, Suction};
+use nalgebra::Isometry3;
+use packwright_interface::outcome::{Failure, Outcome, PlannerKind, Report, Stage};
+use packwright_interface::record::{self, ActionSample, MotionLog, SubGoalSample};
+use packwright_interface::{OrderTask, World};
+use packwright_kinematics::{Arm, Joints};
+use std::time::Instant;
+
+/// What a stage's sub-goals are recorded with.
+#[derive(Debug, Clone, Copy)]
+struct StageInfo {
+    stage: Stage,
+    feature: [f64; 3],
+    label: u32,
+}
+
+struct Scripted<'a, W: World> {
+    station: Station<'a, W>,
+    connect: Connect,
+    log: Option<&'a mut MotionLog>,
+}
+
+/// One stage's joint paths, each with the suction switch at its end.
+type Plan = Vec<(Vec<Joints>, Suction)>;
+
+impl<W: World> Scripted<'_, W> {
+    /// Plans the joint paths from `from` to each sub-goal (a release the
+    /// wrist cannot reach is raised up to the previous sub-goal's height).
+    fn plan_stage(
+        &mut self,
+        from: Joints,
+        goals: &[SubGoal],
+        yaw: f64,
+        load: Load,
+    ) -> Result<Plan, Failure> {
+        let started = Instant::now();
+        let mut out = Vec::new();
+        let mut current = from;
+        for (k, g) in goals.iter().enumerate() {
+            let subgoal_started = Instant::now();
+            let ceiling = goals
+                .get(k.wrapping_sub(1))
+                .map_or(g.tip[2], |prev| prev.tip[2]);
+            let target = self.station.solve(g, k + 1, &current, yaw, load, ceiling)?;
+            let how = match self.connect {
+                Connect::Rrt { seed } => Connect::Rrt {
+                    seed: seed.wrapping_add(k as u64),
+                },
+                straight => straight,
+            };
+            let path = self.station.connect(how, k + 1, current, target, load)?;
+            out.push((path, g.suction));
+            current = target;
+            self.station
+                .timing
+                .subgoal_us
+                .push(subgoal_started.elapsed().as_secs_f64() * 1e6);
+        }
+        self.station.clock.planning_s += started.elapsed().as_secs_f64();
+        Ok(out)
+    }
+
+    /// Records one sub-goal and the actions along the way to it.
+    fn record(
+        &mut self,
+        info: StageInfo,
+        k: usize,
+        start: &Joints,
+        goal: &Joints,
+        samples: &[Joints],
+    ) {
+        let station = &self.station;
+        let Some(log) = self.log.as_deref_mut() else {
+            return;
+        };
+        let target = station.tip(goal);
+        log.subgoals.push(SubGoalSample {
+            feature: info.feature,
+            tool: station.tip(start),
+            label: info.label,
+            stage: info.stage,
+            index: k as u8,
+            target,
+            start: *start,
+            goal: *goal,
+        });
+        let subgoal = log.subgoals.len() - 1;
+        let along: Vec<Joints> = std::iter::once(*start)
+            .chain(samples.iter().copied())
+            .collect();
+        for i in record::spread(along.len(), record::SAMPLES_PER_SUBGOAL) {
+            let here = station.tip(&along[i]);
+            log.actions.push(ActionSample {
+                subgoal,
+                delta: std::array::from_fn(|j| target[j] - here[j]),
+                joints: [along[i][0], along[i][1], along[i][2]],
+                action: record::action(&along[i], goal),
+            });
+        }
+    }
+
+    /// Smooths, checks and sends one stage's motions; switches the suction.
+    fn run_stage(
+        &mut self,
+        plan: Plan,
+        load: Load,
+        info: Option<StageInfo>,
+    ) -> Result<(), Failure> {
+        for (k, (path, suction)) in plan.into_iter().enumerate() {
+            let start = self.station.world.observe().joints;
+            let started = Instant::now();
+            let samples = self
+                .station
+                .checked(k + 1, start, path.get(1..).unwrap_or(&[]), load);
+            self.station.clock.planning_s += started.elapsed().as_secs_f64();
+            let samples = samples?;
+            if let (Some(info), Some(goal)) = (info, path.last()) {
+                self.record(info, k, &start, goal, &samples);
+            }
+            self.station.send(&samples, suction)?;
+        }
+        Ok(())
+    }
+
+    /// Picks product `p` and places it in slot `s`.
+    fn manipulate(&mut self, p: usize, s: usize) -> Result<(), Failure> {
+        let task = self.station.task;
+        let spec = &task.products[p];
+        let name = spec.name.as_str();
+        let cell = &task.cell;
+        let obs = self.station.world.observe();
+        self.station.sync_products(&obs);
+        let (centre, yaw) = obs.find(name).ok_or(Failure::Disappeared)?;
+        let h = spec.size[2];
+        let picking = expert::picking(centre, h, cell.lift);
+        let free = Load {
+            held: None,
+            ignore: Some(name),
+        };
+        let plan = self.plan_stage(obs.joints, &picking, yaw, free)?;
+        let pick = StageInfo {
+            stage: Stage::Picking,
+            feature: centre,
+            label: 0,
+        };
+        self.run_stage(plan, free, Some(pick))?;
+
+        let obs = self.station.world.observe();
+        let held = Held {
+            name: name.to_owned(),
+            size: spec.size,
+            in_flange: Isometry3::translation(0.0, 0.0, cell.suction + h / 2.0),
+        };
+        let slot = cell.slots[s].position;
+        let placing = expert::placing(
+            picking[2].tip,
+            slot,
+            h,
+            expert::box_height(cell, s),
+            [cell.base[0], cell.base[1]],
+        );
+        self.station.sync_products(&obs);
+        let carrying = Load {
+            held: Some(&held),
+            ignore: None,
+        };
+        // Placing the product square in its slot: yaw 0 (it turns with the cup).
+        let plan = self.plan_stage(obs.joints, &placing, 0.0, carrying)?;
+        let place = StageInfo {
+            stage: Stage::Placing,
+            feature: task.box_top(s),
+            label: s as u32 + 1,
+        };
+        self.run_stage(plan, carrying, Some(place))?;
+
+        // Back up from the released product.
+        let obs = self.station.world.observe();
+        let up = [SubGoal {
+            tip: [slot[0], slot[1], placing[1].tip[2]],
+            suction: Suction::Keep,
+        }];
+        let plan = self.plan_stage(obs.joints, &up, 0.0, free)?;
+        self.run_stage(plan, free, None)
+    }
+}
+
+pub(super) fn run<W: World>(
+    world: &mut W,
+    arm: &Arm,
+    task: &OrderTask,
+    connect: Connect,
+    log: Option<&mut MotionLog>,
+) -> Report {
+    let planner = match connect {
+        Connect::Straight => PlannerKind::Expert,
+        Connect::Rrt { .. } => PlannerKind::Rrt,
+    };
+    let mut runner = Scripted {
+        station: Station::new(world, arm, task),
+        connect,
+        log,
+    };
+    let period = runner.station.world.control_period();
+    let mut products = Vec::new();
+    let mut stopped = false;
+    let mut collisions = Vec::new();
+    for &(p, s) in &task.assignment {
+        let decided = Instant::now();
+        let goal = task.goal(p, s);
+        let mut report = runner.station.row(p, s);
+        let obs = runner.station.world.observe();
+        match obs.find(&report.product) {
+            None => report.outcome = Outcome::Waiting,
+            Some((c, _)) if distance(c, goal) <= SUCCESS_RADIUS => {
+                report.error_m = Some(distance(c, goal));
+                report.outcome = Outcome::AlreadyPacked;
+            }
+            Some(_) if stopped => {}
+            Some(_) => {
+                runner
+                    .station
+                    .timing
+                    .decision_us
+                    .push(decided.elapsed().as_secs_f64() * 1e6);
+                runner.station.restart_clock();
+                let result = runner.manipulate(p, s);
+                let after = runner.station.world.observe();
+                report.error_m = runner.station.error_of(&after, p, s);
+                let Clock { planning_s, steps } = runner.station.restart_clock();
+                report.planning_s = planning_s;
+                report.execution_s = steps as f64 * period;
+                report.outcome = match result {
+                    Ok(()) if report.error_m.is_some_and(|e| e <= SUCCESS_RADIUS) => {
+                        Outcome::Packed
+                    }
+                    Ok(()) => Outcome::Failed(Failure::Misplaced {
+                        error_m: report.error_m.unwrap_or(f64::NAN),
+                    }),
+                    Err(why) => Outcome::Failed(why),
+                };
+                if let Outcome::Failed(why) = &report.outcome {
+                    stopped = true;
+                    if let Failure::Collision { contact } = why {
+                        collisions.push(contact.clone());
+                    }
+                }
+            }
+        }
+        products.push(report);
+    }
+    runner.station.finish(planner, products, collisions)
+}

@@ -1,0 +1,381 @@
+//! The stepping primitives both execution loops are built on: the arm in
+//! its world with the cell's collision checker, and what a loop does with
+//! it: find the joints of a sub-goal (inverse kinematics, raising a
+//! release the wrist cannot reach), connect two configurations (straight,
+//! or RRT-Connect), smooth and check the commands, send them and switch the
+//! suction. Each returns a typed [`Failure`] naming the sub-goal.
+//!
+//! Invariant: nothing reaches the world that [`checked_samples`] did not
+//! return.
+
+use crate::collision::{Checker, Held, MAX_STEP, ProductBody};
+use crate::expert::{SubGoal, Suction};
+use crate::rrt::{self, Query, RrtConfig};
+use crate::smoothing::smooth_path;
+use nalgebra::{Isometry3, Point3};
+use packwright_interface::outcome::{Failure, Hit, PlannerKind, ProductReport, Report, Timing};
+use packwright_interface::world::{Contact, Observation, World};
+use packwright_interface::{CellScene, OrderTask};
+use packwright_kinematics::{Arm, Joints, joint_distance, tool_down_pose};
+use std::f64::consts::FRAC_PI_2;
+
+/// How much a release point is raised at a time when the wrist cannot
+/// reach it.
+pub(crate) const RAISE_STEP: f64 = 0.01;
+/// Cycles to wait after switching the suction on (0.1 s).
+const SUCTION_SETTLE: usize = 50;
+/// Cycles to let a released product settle (0.5 s).
+const RELEASE_SETTLE: usize = 250;
+/// Height of the cup tip in the start pose.
+pub const HOME_HEIGHT: f64 = 0.35;
+
+/// How to join two configurations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Connect {
+    /// A straight joint-space segment.
+    Straight,
+    /// RRT-Connect, seeded.
+    Rrt { seed: u64 },
+}
+
+/// Wall-clock planning and simulated motion of the product in hand.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Clock {
+    pub planning_s: f64,
+    pub steps: usize,
+}
+
+/// What a motion carries and may touch: the product held, and the one
+/// being picked (not an obstacle).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Load<'h> {
+    pub held: Option<&'h Held>,
+    pub ignore: Option<&'h str>,
+}
+
+impl<'h> Load<'h> {
+    /// Nothing held, nothing ignored.
+    pub const FREE: Load<'static> = Load {
+        held: None,
+        ignore: None,
+    };
+}
+
+/// The arm in its world, with the cell's checker.
+pub(crate) struct Station<'a, W: World> {
+    pub world: &'a mut W,
+    pub arm: &'a Arm,
+    pub task: &'a OrderTask,
+    pub base: Isometry3<f64>,
+    pub checker: Checker,
+    pub clock: Clock,
+    pub timing: Timing,
+}
+
+impl<'a, W: World> Station<'a, W> {
+    pub fn new(world: &'a mut W, arm: &'a Arm, task: &'a OrderTask) -> Station<'a, W> {
+        let [x, y, z] = task.cell.base;
+        Station {
+            checker: Checker::new(arm, &task.cell),
+            world,
+            arm,
+            task,
+            base: Isometry3::translation(x, y, z),
+            clock: Clock::default(),
+            timing: Timing::default(),
+        }
+    }
+
+    /// The cup tip at joints `q`.
+    pub fn tip(&self, q: &Joints) -> [f64; 3] {
+        self.arm
+            .tool_tip(&self.base, q, self.task.cell.suction)
+            .coords
+            .into()
+    }
+
+    /// The checker's products, from an observation.
+    pub fn sync_products(&mut self, obs: &Observation) {
+        let bodies: Vec<ProductBody> = obs
+            .products
+            .iter()
+            .filter_map(|s| {
+                let spec = self.task.products.iter().find(|p| p.name == s.name)?;
+                Some(ProductBody {
+                    name: s.name.clone(),
+                    centre: s.centre,
+                    size: spec.size,
+                    yaw: s.yaw,
+                })
+            })
+            .collect();
+        self.checker.set_products(&bodies);
+    }
+
+    /// Joints that put the cup tip at sub-goal `goal` (number `k`, from 1)
+    /// from `from`. A release the straight descent cannot reach (checked
+    /// as the commands will be) is raised [`RAISE_STEP`] at a time up to
+    /// `ceiling`: the product drops the rest of the way.
+    pub fn solve(
+        &self,
+        goal: &SubGoal,
+        k: usize,
+        from: &Joints,
+        yaw: f64,
+        load: Load,
+        ceiling: f64,
+    ) -> Result<Joints, Failure> {
+        let solve = |z: f64| {
+            let tip = Point3::new(goal.tip[0], goal.tip[1], z);
+            let q = reach(
+                self.arm,
+                &self.checker,
+                &self.base,
+                tip,
+                yaw,
+                self.task.cell.suction,
+                from,
+                load,
+            )?;
+            let blocked = goal.suction == Suction::Off
+                && checked_samples(self.arm, &self.checker, *from, &[q], load).is_err();
+            (!blocked).then_some(q)
+        };
+        solve(goal.tip[2])
+            .or_else(|| {
+                (goal.suction == Suction::Off)
+                    .then(|| {
+                        (1..)
+                            .map(|i| goal.tip[2] + RAISE_STEP * f64::from(i))
+                            .take_while(|z| *z <= ceiling)
+                            .find_map(solve)
+                    })
+                    .flatten()
+            })
+            .ok_or(Failure::Unreachable {
+                subgoal: k,
+                tip: goal.tip,
+            })
+    }
+
+    /// The joint path from `from` to `to` (both included) for sub-goal `k`.
+    pub fn connect(
+        &self,
+        how: Connect,
+        k: usize,
+        from: Joints,
+        to: Joints,
+        load: Load,
+    ) -> Result<Vec<Joints>, Failure> {
+        match how {
+            Connect::Straight => Ok(vec![from, to]),
+            Connect::Rrt { seed } => {
+                let query = Query {
+                    checker: &self.checker,
+                    limits: &self.arm.limits,
+                    held: load.held,
+                    ignore: load.ignore,
+                };
+                let config = RrtConfig {
+                    seed,
+                    ..RrtConfig::default()
+                };
+                rrt::plan(&query, from, to, &config).ok_or(Failure::NoPath { subgoal: k })
+            }
+        }
+    }
+
+    /// The checked commands from `start` through `waypoints` towards
+    /// sub-goal `k`.
+    pub fn checked(
+        &self,
+        k: usize,
+        start: Joints,
+        waypoints: &[Joints],
+        load: Load,
+    ) -> Result<Vec<Joints>, Failure> {
+        checked_samples(self.arm, &self.checker, start, waypoints, load).map_err(|e| match e {
+            Unchecked::Collides(hit) => Failure::WouldCollide { subgoal: k, hit },
+            Unchecked::Smoothing(reason) => Failure::Smoothing { subgoal: k, reason },
+        })
+    }
+
+    /// Sends checked commands, then switches the suction and lets things
+    /// settle; fails on any contact the world reports.
+    pub fn send(&mut self, samples: &[Joints], suction: Suction) -> Result<(), Failure> {
+        for q in samples {
+            self.world.command(q)?;
+            self.world.step()?;
+            self.clock.steps += 1;
+        }
+        let settle = match suction {
+            Suction::Keep => 0,
+            Suction::On => {
+                self.world.set_suction(true)?;
+                SUCTION_SETTLE
+            }
+            Suction::Off => {
+                self.world.set_suction(false)?;
+                RELEASE_SETTLE
+            }
+        };
+        for _ in 0..settle {
+            self.world.step()?;
+            self.clock.steps += 1;
+        }
+        match self.world.take_collisions().into_iter().next() {
+            Some(contact) => Err(Failure::Collision { contact }),
+            None => Ok(()),
+        }
+    }
+
+    /// The clock of the product in hand, restarted.
+    pub fn restart_clock(&mut self) -> Clock {
+        std::mem::take(&mut self.clock)
+    }
+
+    /// A report row for the selected product `p` going to slot `s`.
+    pub fn row(&self, p: usize, s: usize) -> ProductReport {
+        ProductReport {
+            product: self.task.products[p].name.clone(),
+            slot: self.task.cell.slots[s].name.clone(),
+            planning_s: 0.0,
+            execution_s: 0.0,
+            error_m: None,
+            outcome: packwright_interface::Outcome::NotAttempted,
+        }
+    }
+
+    /// How far product `p` is from its goal in slot `s` now.
+    pub fn error_of(&self, obs: &Observation, p: usize, s: usize) -> Option<f64> {
+        obs.find(&self.task.products[p].name)
+            .map(|(c, _)| distance(c, self.task.goal(p, s)))
+    }
+
+    /// The report once the arm has stopped: products knocked out of place
+    /// later count as failed too.
+    pub fn finish(
+        &mut self,
+        planner: PlannerKind,
+        mut products: Vec<ProductReport>,
+        collisions: Vec<Contact>,
+    ) -> Report {
+        let task = self.task;
+        let last = self.world.observe();
+        for (report, &(p, s)) in products.iter_mut().zip(&task.assignment) {
+            if report.outcome.in_slot() {
+                let error = self.error_of(&last, p, s);
+                report.error_m = error;
+                if !error.is_some_and(|e| e <= SUCCESS_RADIUS) {
+                    report.outcome = packwright_interface::Outcome::Failed(Failure::MovedLater);
+                }
+            }
+        }
+        let complete = products.iter().all(|r| r.outcome.in_slot()) && collisions.is_empty();
+        Report {
+            planner,
+            products,
+            complete,
+            collisions,
+            time_s: last.time,
+            fallbacks: Vec::new(),
+            violations: Vec::new(),
+            timing: std::mem::take(&mut self.timing),
+        }
+    }
+}
+
+pub(crate) use packwright_interface::outcome::SUCCESS_RADIUS;
+
+pub(crate) fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Why [`checked_samples`] gave no commands.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Unchecked {
+    /// A command would collide.
+    Collides(Hit),
+    /// The smoother refused (its reason, for people).
+    Smoothing(String),
+}
+
+/// The smoothed 2 ms commands from `start` through `waypoints`, each
+/// checked for collision (the straight joint segment from the last checked
+/// sample, at most 1 degree on): the very commands that will be sent, or
+/// why they would not do.
+pub fn checked_samples(
+    arm: &Arm,
+    checker: &Checker,
+    start: Joints,
+    waypoints: &[Joints],
+    load: Load,
+) -> Result<Vec<Joints>, Unchecked> {
+    let samples = smooth_path(arm.limits, start, waypoints)
+        .map_err(|e| Unchecked::Smoothing(e.to_string()))?;
+    let mut last = start;
+    for (i, q) in samples.iter().enumerate() {
+        let span = q
+            .iter()
+            .zip(&last)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        if span >= MAX_STEP || i + 1 == samples.len() {
+            if let Some(hit) = checker.check_motion(&last, q, load.held, load.ignore) {
+                return Err(Unchecked::Collides(hit));
+            }
+            last = *q;
+        }
+    }
+    Ok(samples)
+}
+
+/// Joints that put the cup tip at `tip` pointing down with `yaw`, free of
+/// collisions: among the inverse-kinematics branches (all eight for a UR
+/// arm), the one nearest `near` that the checker finds free.
+#[allow(clippy::too_many_arguments)]
+pub fn reach(
+    arm: &Arm,
+    checker: &Checker,
+    base: &Isometry3<f64>,
+    tip: Point3<f64>,
+    yaw: f64,
+    suction: f64,
+    near: &Joints,
+    load: Load,
+) -> Option<Joints> {
+    let flange = tool_down_pose(tip, yaw, suction);
+    let mut candidates: Vec<Joints> = if arm.ur.is_some() {
+        arm.ur_ik_branches(base, &flange, near)
+            .into_iter()
+            .flatten()
+            .collect()
+    } else {
+        arm.pose_ik(base, &flange, near).into_iter().collect()
+    };
+    candidates.sort_by(|a, b| joint_distance(a, near).total_cmp(&joint_distance(b, near)));
+    candidates
+        .into_iter()
+        .find(|q| checker.check(q, load.held, load.ignore).is_none())
+}
+
+/// The start pose: the cup [`HOME_HEIGHT`] over the middle of the pending
+/// area, pointing down, collision-free, on the branch nearest the usual UR
+/// "ready" pose.
+pub fn home(arm: &Arm, cell: &CellScene) -> Option<Joints> {
+    let (lo, hi) = cell.pending;
+    let tip = Point3::new((lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, HOME_HEIGHT);
+    let base = Isometry3::translation(cell.base[0], cell.base[1], cell.base[2]);
+    let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
+    let checker = Checker::new(arm, cell);
+    reach(
+        arm,
+        &checker,
+        &base,
+        tip,
+        0.0,
+        cell.suction,
+        &ready,
+        Load::FREE,
+    )
+}

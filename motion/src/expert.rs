@@ -1,0 +1,134 @@
+//! The scripted expert's geometry: the three sub-goals of each stage
+//! (README, "How the robot packs"), as tool-tip positions in the world
+//! frame.
+//!
+//! Picking: above the product at hover height; on its top face (suction
+//! on); lifted by the cell's lift height. Placing: an approach point at
+//! carrying height between the lift point and the slot; above the slot,
+//! clear of the box's rim; down into the slot, the product's bottom
+//! [`RELEASE_GAP`] above the box floor (suction off).
+
+use packwright_interface::scene::CellScene;
+
+/// Height of the hover point above a product's top face.
+pub const HOVER: f64 = 0.10;
+/// The approach point is kept at least this far from the base axis.
+pub const MIN_APPROACH_RADIUS: f64 = 0.35;
+/// Clearance of a held product's bottom over the box rim, above the slot.
+pub const RIM_CLEARANCE: f64 = 0.05;
+/// Height of a held product's bottom over the box floor when released.
+pub const RELEASE_GAP: f64 = 0.005;
+
+/// What the suction does when a sub-goal is reached.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Suction {
+    Keep,
+    On,
+    Off,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SubGoal {
+    /// Tool-tip position.
+    pub tip: [f64; 3],
+    pub suction: Suction,
+}
+
+/// The picking sub-goals for a product whose centre is `centre` and height
+/// `height`, carried `lift` above where it stood.
+pub fn picking(centre: [f64; 3], height: f64, lift: f64) -> [SubGoal; 3] {
+    let top = centre[2] + height / 2.0;
+    [
+        SubGoal {
+            tip: [centre[0], centre[1], top + HOVER],
+            suction: Suction::Keep,
+        },
+        SubGoal {
+            tip: [centre[0], centre[1], top],
+            suction: Suction::On,
+        },
+        SubGoal {
+            tip: [centre[0], centre[1], top + lift],
+            suction: Suction::Keep,
+        },
+    ]
+}
+
+/// The placing sub-goals for a held product of `height` whose tip is at
+/// `from` (the lift point), going to the slot at `slot` in a box
+/// `box_height` tall, for a robot whose base axis stands at `base`.
+pub fn placing(
+    from: [f64; 3],
+    slot: [f64; 2],
+    height: f64,
+    box_height: f64,
+    base: [f64; 2],
+) -> [SubGoal; 3] {
+    let above = box_height + height + RIM_CLEARANCE;
+    let carry = from[2].max(above);
+    let polar = |p: [f64; 2]| {
+        let (dx, dy) = (p[0] - base[0], p[1] - base[1]);
+        (dy.atan2(dx), dx.hypot(dy))
+    };
+    let (a0, r0) = polar([from[0], from[1]]);
+    let (a1, r1) = polar(slot);
+    // The shorter way around.
+    let mut turn = a1 - a0;
+    while turn > std::f64::consts::PI {
+        turn -= std::f64::consts::TAU;
+    }
+    while turn < -std::f64::consts::PI {
+        turn += std::f64::consts::TAU;
+    }
+    let angle = a0 + turn / 2.0;
+    let radius = ((r0 + r1) / 2.0).max(MIN_APPROACH_RADIUS);
+    [
+        SubGoal {
+            tip: [
+                base[0] + radius * angle.cos(),
+                base[1] + radius * angle.sin(),
+                carry,
+            ],
+            suction: Suction::Keep,
+        },
+        SubGoal {
+            tip: [slot[0], slot[1], above],
+            suction: Suction::Keep,
+        },
+        SubGoal {
+            tip: [slot[0], slot[1], height + RELEASE_GAP],
+            suction: Suction::Off,
+        },
+    ]
+}
+
+/// The box a slot belongs to, and its height.
+pub fn box_height(cell: &CellScene, slot: usize) -> f64 {
+    cell.slots
+        .get(slot)
+        .and_then(|s| cell.boxes.get(s.box_index))
+        .map_or(0.0, |b| b.size[2])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sub_goals_follow_the_geometry() {
+        let p = picking([0.6, -0.3, 0.025], 0.05, 0.15);
+        assert_eq!(p[1].tip, [0.6, -0.3, 0.05]);
+        assert_eq!(p[1].suction, Suction::On);
+        assert!((p[0].tip[2] - 0.15).abs() < 1e-12);
+        assert!((p[2].tip[2] - 0.20).abs() < 1e-12);
+        let q = placing(p[2].tip, [0.0, 0.6], 0.05, 0.08, [0.0, 0.0]);
+        assert!((q[1].tip[2] - 0.18).abs() < 1e-12);
+        assert!((q[0].tip[2] - 0.20).abs() < 1e-12);
+        assert!((q[2].tip[2] - 0.055).abs() < 1e-12);
+        assert_eq!(q[2].suction, Suction::Off);
+        // The approach point goes around the base, not over it.
+        let behind = placing([0.55, -0.2, 0.2], [-0.55, 0.0], 0.05, 0.08, [0.1, 0.05]);
+        let [x, y, _] = behind[0].tip;
+        assert!((x - 0.1).hypot(y - 0.05) >= MIN_APPROACH_RADIUS - 1e-9);
+    }
+}

@@ -1,0 +1,419 @@
+//! Jerk-limited joint smoothing at the UR control rate.
+//!
+//! Planners produce joint-space waypoints; a robot wants one position
+//! command every [`CONTROL_PERIOD`] (2 ms, 500 Hz) that it can follow without
+//! violating its drives' limits. [`Smoother`] turns the former into the latter
+//! with [Ruckig](https://ruckig.com) (the pure-Rust port `rsruckig`), online:
+//! one call to [`Smoother::step`] per control cycle, and the target may change
+//! at any cycle ([`Smoother::set_target`]), the new motion starting from the
+//! current position, velocity and acceleration.
+//!
+//! # Contract
+//!
+//! - **What is limited**, per joint, from its [`Limits`]: `|velocity| ≤
+//!   velocity`, `|acceleration| ≤ acceleration`, `|jerk| ≤ jerk` (the
+//!   trajectory is piecewise cubic: the jerk is piecewise constant, the
+//!   acceleration continuous), and the position stays in `[lower, upper]`.
+//!   These hold for the continuous trajectory up to Ruckig's numerical
+//!   tolerances (positions 1e-8·max(1, |limit|), velocities 1e-8); the
+//!   commanded samples are points on it.
+//! - **Targets** are joint positions to stop at (zero target velocity and
+//!   acceleration). A target outside `[lower, upper]` (beyond
+//!   [`POSITION_TOLERANCE`], the tolerance of [`Arm::within_limits`]) or not
+//!   finite is an error: it is never clamped.
+//! - **Synchronisation**: phase-synchronised: every joint follows the same
+//!   normalised profile, so a rest-to-rest move is a straight line in joint
+//!   space, the very segment the collision checker verified (with time
+//!   synchronisation the joints arrive together but the path bends away
+//!   from the checked line, and near a box wall that matters). The move
+//!   lasts as long as the slowest joint's time-optimal move.
+//! - **The cycle**: each [`Smoother::step`] advances the trajectory by
+//!   exactly [`CONTROL_PERIOD`] and returns the state there: the command for
+//!   the next cycle.
+//! - **Finished** is detected by time, as Ruckig does: the first step whose
+//!   time passes the end of the trajectory has `done: true` and commands the
+//!   target itself, exactly, with velocity and acceleration zero (Ruckig
+//!   lands within ~1e-15 rad of it; the smoother replaces that by the
+//!   target), and so does every later step until the target changes. The
+//!   last commanded sample of a move is therefore the target, and a move of
+//!   duration `d` takes `⌊d / CONTROL_PERIOD⌋ + 1` steps (up to rounding of
+//!   the accumulated time).
+//!
+//! Errors (invalid limits, start or target, a trajectory Ruckig cannot
+//! compute, non-finite output) are [`SmoothingError`]; nothing here
+//! panics.
+//!
+//! [`Arm::within_limits`]: packwright_kinematics::Arm::within_limits
+
+use rsruckig::prelude::*;
+
+use crate::error::{Position, SmoothingError};
+use packwright_interface::{DOF, Joints, Limits};
+
+/// The control cycle in seconds: Universal Robots controllers take a joint
+/// command every 2 ms (500 Hz).
+pub const CONTROL_PERIOD: f64 = 0.002;
+
+/// How far (rad) a start or target may lie outside `[lower, upper]` and still
+/// count as inside: the same tolerance as
+/// [`Arm::within_limits`](packwright_kinematics::Arm::within_limits), so a
+/// configuration the arm model accepts is accepted here.
+pub const POSITION_TOLERANCE: f64 = 1e-9;
+
+/// How far (rad) from its target Ruckig may finish before that is an error
+/// rather than rounding; within it, the final step commands the target
+/// exactly.
+const FINISH_TOLERANCE: f64 = 1e-6;
+
+/// Ruckig rejects trajectories longer than this (seconds); it also bounds the
+/// samples [`smooth_path`] takes for one segment.
+const MAX_SEGMENT_DURATION: f64 = 7.6e3;
+
+/// One control cycle's command.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// Joint positions to command (rad).
+    pub position: Joints,
+    /// Joint velocities at that instant (rad/s).
+    pub velocity: Joints,
+    /// Joint accelerations at that instant (rad/s²).
+    pub acceleration: Joints,
+    /// The target is reached: `position` is the target, at rest.
+    pub done: bool,
+}
+
+/// An online, jerk-limited trajectory generator for the 6 joints, stepped
+/// once per [`CONTROL_PERIOD`]. See the [module documentation](self) for the
+/// contract.
+///
+/// ```
+/// use packwright_interface::Limits;
+/// use packwright_motion::smoothing::Smoother;
+///
+/// let limits = [Limits { lower: -6.0, upper: 6.0, velocity: 2.0, acceleration: 2.5, jerk: 15.0 }; 6];
+/// let mut smoother = Smoother::new(limits, [0.0; 6])?;
+/// smoother.set_target([0.5, -0.2, 0.1, 0.0, 0.3, -1.0])?;
+/// loop {
+///     let step = smoother.step()?;
+///     // send step.position to the robot ...
+///     if step.done {
+///         break;
+///     }
+/// }
+/// # Ok::<(), packwright_motion::error::SmoothingError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Smoother {
+    limits: [Limits; DOF],
+    otg: Ruckig<DOF, ThrowErrorHandler>,
+    /// The current state (updated every step), the target and the limits.
+    input: InputParameter<DOF>,
+    output: OutputParameter<DOF>,
+}
+
+impl Smoother {
+    /// A smoother at rest at `start`, whose target is `start`.
+    ///
+    /// Errors if a velocity, acceleration or jerk limit is not finite and
+    /// positive, a position range is empty or NaN, or `start` is not finite
+    /// or outside the position limits.
+    pub fn new(limits: [Limits; DOF], start: Joints) -> Result<Smoother, SmoothingError> {
+        check_limits(&limits)?;
+        check_position(&limits, &start, Position::Start)?;
+
+        let mut input = InputParameter::<DOF>::new(None);
+        input.synchronization = Synchronization::Phase;
+        input.control_interface = ControlInterface::Position;
+        input.duration_discretization = DurationDiscretization::Continuous;
+        let mut max_position = [0.0; DOF];
+        let mut min_position = [0.0; DOF];
+        for (j, l) in limits.iter().enumerate() {
+            input.max_velocity[j] = l.velocity;
+            input.max_acceleration[j] = l.acceleration;
+            input.max_jerk[j] = l.jerk;
+            max_position[j] = l.upper + POSITION_TOLERANCE;
+            min_position[j] = l.lower - POSITION_TOLERANCE;
+        }
+        input.max_position = Some(DataArrayOrVec::Stack(max_position));
+        input.min_position = Some(DataArrayOrVec::Stack(min_position));
+
+        let mut smoother = Smoother {
+            limits,
+            otg: Ruckig::new(None, CONTROL_PERIOD),
+            input,
+            output: OutputParameter::new(None),
+        };
+        smoother.reset(start);
+        Ok(smoother)
+    }
+
+    /// The limits this smoother enforces.
+    pub fn limits(&self) -> &[Limits; DOF] {
+        &self.limits
+    }
+
+    /// The current target position.
+    pub fn target(&self) -> Joints {
+        to_joints(&self.input.target_position)
+    }
+
+    /// Move to `target` and stop there (zero velocity and acceleration).
+    ///
+    /// Takes effect at the next [`step`](Self::step), which plans from the
+    /// current state: the arm may be moving towards an earlier target.
+    /// Errors, leaving the target unchanged, if `target` is not finite or
+    /// outside the position limits.
+    pub fn set_target(&mut self, target: Joints) -> Result<(), SmoothingError> {
+        check_position(&self.limits, &target, Position::Target)?;
+        self.input.target_position.copy_from_slice(&target);
+        Ok(())
+    }
+
+    /// Advance one [`CONTROL_PERIOD`] and return the command for it.
+    ///
+    /// The first step after a new target (or a [`reset`](Self::reset))
+    /// computes the trajectory; the following ones sample it. Errors if
+    /// Ruckig finds no trajectory (for instance a new target that cannot be
+    /// reached without crossing a position limit given the current
+    /// velocity), or after a reset to a non-finite position; the state is
+    /// then unchanged.
+    pub fn step(&mut self) -> Result<Step, SmoothingError> {
+        if !all_finite(&self.input.current_position) {
+            return Err(SmoothingError::NonFiniteCurrent {
+                position: to_joints(&self.input.current_position),
+            });
+        }
+        let done = match self.otg.update(&self.input, &mut self.output) {
+            Ok(RuckigResult::Working) => false,
+            Ok(RuckigResult::Finished) => true,
+            Ok(other) => {
+                return Err(SmoothingError::NoTrajectory {
+                    from: to_joints(&self.input.current_position),
+                    to: to_joints(&self.input.target_position),
+                    reason: format!("Ruckig returned {other:?}"),
+                });
+            }
+            Err(e) => {
+                return Err(SmoothingError::NoTrajectory {
+                    from: to_joints(&self.input.current_position),
+                    to: to_joints(&self.input.target_position),
+                    reason: e.to_string(),
+                });
+            }
+        };
+        let out = &self.output;
+        if !(all_finite(&out.new_position)
+            && all_finite(&out.new_velocity)
+            && all_finite(&out.new_acceleration))
+        {
+            return Err(SmoothingError::NonFiniteOutput {
+                from: to_joints(&self.input.current_position),
+                to: to_joints(&self.input.target_position),
+            });
+        }
+        let mut step = Step {
+            position: to_joints(&out.new_position),
+            velocity: to_joints(&out.new_velocity),
+            acceleration: to_joints(&out.new_acceleration),
+            done,
+        };
+        if done {
+            // Ruckig ends within ~1e-15 rad of the target (its profiles are
+            // accepted within 1e-8): command the target itself, at rest.
+            let target = to_joints(&self.input.target_position);
+            let miss = (0..DOF)
+                .map(|j| (step.position[j] - target[j]).abs())
+                .fold(0.0, f64::max);
+            if miss > FINISH_TOLERANCE {
+                return Err(SmoothingError::MissedTarget {
+                    at: step.position,
+                    target,
+                    miss,
+                });
+            }
+            step.position = target;
+            step.velocity = [0.0; DOF];
+            step.acceleration = [0.0; DOF];
+        }
+        self.input.current_position.copy_from_slice(&step.position);
+        self.input.current_velocity.copy_from_slice(&step.velocity);
+        self.input
+            .current_acceleration
+            .copy_from_slice(&step.acceleration);
+        Ok(step)
+    }
+
+    /// The current (last commanded) position, velocity and acceleration.
+    pub fn state(&self) -> (Joints, Joints, Joints) {
+        (
+            to_joints(&self.input.current_position),
+            to_joints(&self.input.current_velocity),
+            to_joints(&self.input.current_acceleration),
+        )
+    }
+
+    /// Stop at `position`, at rest, with `position` as the target: for
+    /// example after a protective stop, from the position the robot reports.
+    ///
+    /// This cannot fail. A position slightly outside the limits is allowed
+    /// (the next move may only go back inside); a non-finite one makes every
+    /// [`step`](Self::step) an error until the next reset.
+    pub fn reset(&mut self, position: Joints) {
+        self.input.current_position.copy_from_slice(&position);
+        self.input.current_velocity.fill(0.0);
+        self.input.current_acceleration.fill(0.0);
+        self.input.target_position.copy_from_slice(&position);
+        self.input.target_velocity.fill(0.0);
+        self.input.target_acceleration.fill(0.0);
+        self.otg.reset();
+    }
+}
+
+/// Every commanded 2 ms position of a motion from `start` (at rest) through
+/// each of `waypoints` in turn.
+///
+/// The arm **stops at every waypoint** (each is a separate rest-to-rest move;
+/// no blending), so the result passes exactly through them. `start` itself is
+/// not included (it is not commanded); the last sample of each segment is
+/// its waypoint. No waypoints: no samples.
+pub fn smooth_path(
+    limits: [Limits; DOF],
+    start: Joints,
+    waypoints: &[Joints],
+) -> Result<Vec<Joints>, SmoothingError> {
+    let mut smoother = Smoother::new(limits, start)?;
+    for (i, w) in waypoints.iter().enumerate() {
+        check_position(&limits, w, Position::Waypoint(i))?;
+    }
+    let max_steps = (MAX_SEGMENT_DURATION / CONTROL_PERIOD) as usize + 2;
+    let mut samples = Vec::new();
+    for (i, w) in waypoints.iter().enumerate() {
+        smoother.set_target(*w)?;
+        let mut steps = 0;
+        loop {
+            let step = smoother.step()?;
+            samples.push(step.position);
+            if step.done {
+                break;
+            }
+            steps += 1;
+            if steps > max_steps {
+                return Err(SmoothingError::TooLong {
+                    waypoint: i,
+                    limit_s: MAX_SEGMENT_DURATION,
+                });
+            }
+        }
+    }
+    Ok(samples)
+}
+
+/// The duration (seconds) of the motion [`smooth_path`] commands: the sum of
+/// the time-optimal (phase-synchronised) durations of its rest-to-rest
+/// segments, each computed offline by Ruckig.
+///
+/// This is continuous time: [`smooth_path`] returns
+/// `⌊d / CONTROL_PERIOD⌋ + 1` samples for a segment of duration `d`, so its
+/// samples span at most one control period per segment more.
+pub fn duration_of(
+    limits: [Limits; DOF],
+    start: Joints,
+    waypoints: &[Joints],
+) -> Result<f64, SmoothingError> {
+    let mut smoother = Smoother::new(limits, start)?;
+    let Smoother {
+        otg, input, output, ..
+    } = &mut smoother;
+    let trajectory = &mut output.trajectory;
+    let mut total = 0.0;
+    for (i, w) in waypoints.iter().enumerate() {
+        check_position(&limits, w, Position::Waypoint(i))?;
+        input.target_position.copy_from_slice(w);
+        match otg.calculate(input, trajectory) {
+            Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => {}
+            Ok(other) => {
+                return Err(SmoothingError::NoTrajectory {
+                    from: to_joints(&input.current_position),
+                    to: *w,
+                    reason: format!("Ruckig returned {other:?}"),
+                });
+            }
+            Err(e) => {
+                return Err(SmoothingError::NoTrajectory {
+                    from: to_joints(&input.current_position),
+                    to: *w,
+                    reason: e.to_string(),
+                });
+            }
+        }
+        let d = trajectory.get_duration();
+        if !d.is_finite() || d < 0.0 {
+            return Err(SmoothingError::BadDuration {
+                waypoint: i,
+                duration: d,
+            });
+        }
+        total += d;
+        input.current_position.copy_from_slice(w);
+    }
+    Ok(total)
+}
+
+fn check_limits(limits: &[Limits; DOF]) -> Result<(), SmoothingError> {
+    for (j, l) in limits.iter().enumerate() {
+        for (name, value) in [
+            ("velocity", l.velocity),
+            ("acceleration", l.acceleration),
+            ("jerk", l.jerk),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(SmoothingError::BadLimit {
+                    joint: j,
+                    limit: name,
+                    value,
+                });
+            }
+        }
+        // Infinite position limits (a continuous joint) are allowed.
+        if l.lower.is_nan() || l.upper.is_nan() || l.lower > l.upper {
+            return Err(SmoothingError::BadRange {
+                joint: j,
+                lower: l.lower,
+                upper: l.upper,
+            });
+        }
+    }
+    Ok(())
+}
+
+fn check_position(limits: &[Limits; DOF], q: &Joints, at: Position) -> Result<(), SmoothingError> {
+    for (j, (v, l)) in q.iter().zip(limits).enumerate() {
+        if !v.is_finite() {
+            return Err(SmoothingError::NonFinite {
+                at,
+                joint: j,
+                value: *v,
+            });
+        }
+        if *v < l.lower - POSITION_TOLERANCE || *v > l.upper + POSITION_TOLERANCE {
+            return Err(SmoothingError::OutsideLimits {
+                at,
+                joint: j,
+                value: *v,
+                lower: l.lower,
+                upper: l.upper,
+            });
+        }
+    }
+    Ok(())
+}
+
+fn all_finite(values: &[f64]) -> bool {
+    values.iter().all(|v| v.is_finite())
+}
+
+fn to_joints(values: &[f64]) -> Joints {
+    let mut q = [0.0; DOF];
+    q.copy_from_slice(&values[..DOF]);
+    q
+}

@@ -1,0 +1,292 @@
+//! Packing orders end to end in the simulator, with the scripted expert,
+//! with RRT-Connect, and with the learned loop driven by scripted policies
+//! (its fallbacks and its violations).
+
+mod common;
+use common::bench_cell;
+
+use packwright_interface::Choice;
+use packwright_interface::OrderTask;
+use packwright_interface::Policy;
+use packwright_interface::outcome::{Outcome, Report, Shortfall, Stage, Violation};
+use packwright_interface::scene::{Placement, ProductSpec};
+use packwright_kinematics::Arm;
+use packwright_motion::execute::{self, Planner};
+use packwright_motion::expert;
+use packwright_sim::Simulator;
+
+fn products() -> Vec<(ProductSpec, [f64; 2])> {
+    let p = |name: &str, size: [f64; 3], at: [f64; 2]| {
+        (
+            ProductSpec {
+                name: name.into(),
+                size,
+                mass: 0.2,
+            },
+            at,
+        )
+    };
+    vec![
+        p("A", [0.05; 3], [0.50, -0.20]),
+        p("B", [0.05; 3], [0.62, -0.20]),
+        p("C", [0.05; 3], [0.74, -0.20]),
+        p("D", [0.05; 3], [0.56, -0.38]),
+        p("E", [0.06, 0.04, 0.05], [0.68, -0.38]),
+    ]
+}
+
+/// An order ready to run: `assign` maps product names to slot names;
+/// `packed` products start in their slots, `missing` ones are absent.
+fn episode(
+    assign: &[(&str, &str)],
+    packed: &[&str],
+    missing: &[&str],
+) -> (Arm, OrderTask, Simulator) {
+    let arm = Arm::ur10();
+    let cell = bench_cell();
+    let inventory = products();
+    let specs: Vec<ProductSpec> = inventory.iter().map(|(s, _)| s.clone()).collect();
+    let mut assignment: Vec<(usize, usize)> = assign
+        .iter()
+        .map(|(p, s)| {
+            let pi = specs.iter().position(|x| x.name == *p).expect("product");
+            let si = cell.slots.iter().position(|x| x.name == *s).expect("slot");
+            (pi, si)
+        })
+        .collect();
+    assignment.sort_unstable();
+    let task = OrderTask {
+        cell: cell.clone(),
+        products: specs,
+        assignment,
+    };
+    let placements: Vec<Placement> = inventory
+        .iter()
+        .enumerate()
+        .filter(|(_, (s, _))| !missing.contains(&s.name.as_str()))
+        .map(|(i, (s, at))| {
+            let centre = match task.assignment.iter().find(|(p, _)| *p == i) {
+                Some(&(p, slot)) if packed.contains(&s.name.as_str()) => task.goal(p, slot),
+                _ => [at[0], at[1], s.size[2] / 2.0],
+            };
+            Placement {
+                product: s.clone(),
+                centre,
+            }
+        })
+        .collect();
+    let start = execute::home(&arm, &cell).expect("a start pose");
+    let sim = Simulator::new(arm.clone(), &cell, &placements, start).expect("a valid simulation");
+    (arm, task, sim)
+}
+
+fn run(assign: &[(&str, &str)], packed: &[&str], missing: &[&str], planner: Planner) -> Report {
+    let (arm, task, mut sim) = episode(assign, packed, missing);
+    execute::run(&mut sim, &arm, &task, &planner)
+}
+
+fn assert_packed(report: &Report) {
+    for p in &report.products {
+        assert!(
+            matches!(p.outcome, Outcome::Packed | Outcome::AlreadyPacked),
+            "{} -> {}: {:?} (error {:?})",
+            p.product,
+            p.slot,
+            p.outcome,
+            p.error_m
+        );
+    }
+    assert!(report.complete, "{report:#?}");
+}
+
+#[test]
+fn the_expert_packs_an_order() {
+    let report = run(
+        &[("C", "g1"), ("A", "g3"), ("E", "g2")],
+        &[],
+        &[],
+        Planner::Expert,
+    );
+    assert_packed(&report);
+    for p in &report.products {
+        assert!(p.error_m.is_some_and(|e| e < 0.02));
+        assert!(p.execution_s > 1.0, "moving takes simulated time");
+    }
+}
+
+#[test]
+fn rrt_connect_packs_an_order() {
+    let report = run(
+        &[("B", "g4"), ("D", "g2")],
+        &[],
+        &[],
+        Planner::Rrt { seed: 1 },
+    );
+    assert_packed(&report);
+}
+
+#[test]
+fn a_worker_started_package_is_finished_and_missing_stock_waits() {
+    let report = run(
+        &[("A", "g1"), ("C", "g2"), ("E", "g3")],
+        &["C"],
+        &[],
+        Planner::Expert,
+    );
+    assert_packed(&report);
+    assert_eq!(report.products[1].outcome, Outcome::AlreadyPacked);
+    let short = run(&[("A", "g1"), ("C", "g2")], &[], &["A"], Planner::Expert);
+    assert_eq!(short.products[0].outcome, Outcome::Waiting);
+    assert_eq!(short.products[1].outcome, Outcome::Packed);
+    assert!(
+        !short.complete,
+        "a package with a missing product is not complete"
+    );
+}
+
+/// A scripted stand-in for trained networks on the bench cell (products
+/// 5 cm tall): the demonstrated rule as the reasoner, the expert's
+/// geometry as the sub-goal planner, and a dynamics policy that never
+/// moves the arm.
+struct Scripted {
+    task: OrderTask,
+    /// Pick this product first, whatever the order says.
+    wrong_pick: Option<usize>,
+}
+
+impl Policy for Scripted {
+    fn reason(&self, nodes: &[[f32; 4]], goal_of: &dyn Fn(Option<usize>) -> [f32; 3]) -> Choice {
+        let height = 0.05;
+        if let Some(node) = self.wrong_pick {
+            return Choice {
+                node: Some(node),
+                label: 0,
+            };
+        }
+        // A product more than 5 cm above where it stands is held: place it.
+        if nodes.iter().any(|n| f64::from(n[2]) > height / 2.0 + 0.05) {
+            let goal = goal_of(None);
+            let slot = self.task.cell.slots.iter().position(|s| {
+                (s.position[0] - f64::from(goal[0])).hypot(s.position[1] - f64::from(goal[1]))
+                    < 1e-3
+            });
+            return Choice {
+                node: None,
+                label: slot.map_or(0, |s| s + 1),
+            };
+        }
+        let next = (0..nodes.len()).find(|&i| {
+            let g = goal_of(Some(i));
+            let n = nodes[i];
+            let away = (0..3).map(|j| (n[j] - g[j]).powi(2)).sum::<f32>().sqrt();
+            n[3] > 0.5 && away > 0.02
+        });
+        Choice {
+            node: next,
+            label: 0,
+        }
+    }
+
+    fn subgoal(&self, feature: [f32; 3], tool: [f32; 3], label: usize, index: usize) -> [f32; 3] {
+        let f = |v: [f32; 3]| v.map(f64::from);
+        let cell = &self.task.cell;
+        let goals = match label.checked_sub(1) {
+            None => expert::picking(f(feature), 0.05, cell.lift),
+            Some(s) => expert::placing(
+                f(tool),
+                cell.slots[s].position,
+                0.05,
+                expert::box_height(cell, s),
+                [cell.base[0], cell.base[1]],
+            ),
+        };
+        goals[index.min(2)].tip.map(|v| v as f32)
+    }
+
+    fn action(&self, _delta: [f32; 3], _joints: [f32; 3]) -> [f32; 3] {
+        [0.0; 3]
+    }
+}
+
+/// A dynamics policy that does not move reaches no sub-goal: every stage
+/// is handed to RRT-Connect at its first sub-goal, counted with the
+/// distance left, and the package is still packed.
+#[test]
+fn the_learned_loop_falls_back_to_rrt_connect_and_says_why() {
+    let assign = [("A", "g1"), ("D", "g5")];
+    let (arm, task, mut sim) = episode(&assign, &[], &[]);
+    let policy = Scripted {
+        task: task.clone(),
+        wrong_pick: None,
+    };
+    let report = execute::run(
+        &mut sim,
+        &arm,
+        &task,
+        &Planner::Learned {
+            policy: &policy,
+            seed: 3,
+        },
+    );
+    assert_packed(&report);
+    assert!(report.violations.is_empty(), "{:?}", report.violations);
+    // Two stages per product, each falling back at its first sub-goal.
+    assert_eq!(
+        report.fallbacks.len(),
+        2 * assign.len(),
+        "{:#?}",
+        report.fallbacks
+    );
+    for (i, f) in report.fallbacks.iter().enumerate() {
+        let stage = if i % 2 == 1 {
+            Stage::Placing
+        } else {
+            Stage::Picking
+        };
+        assert_eq!((f.stage, f.subgoal), (stage, 1), "{f}");
+        assert!(
+            matches!(f.why, Shortfall::Short { distance_m, .. } if distance_m > execute::REACHED_VIA),
+            "{f}"
+        );
+    }
+    assert_eq!(report.fallbacks[0].product, "A");
+    assert!(
+        report.fallbacks[3]
+            .to_string()
+            .starts_with("placing D, sub-goal 1: 30 policy steps ended")
+    );
+}
+
+/// A reasoner that picks a product the order does not select breaks the
+/// order: the violation is reported and the arm stops before moving.
+#[test]
+fn a_decision_against_the_order_stops_the_arm() {
+    let (arm, task, mut sim) = episode(&[("A", "g1"), ("D", "g5")], &[], &[]);
+    let policy = Scripted {
+        task: task.clone(),
+        wrong_pick: Some(1),
+    };
+    let report = execute::run(
+        &mut sim,
+        &arm,
+        &task,
+        &Planner::Learned {
+            policy: &policy,
+            seed: 3,
+        },
+    );
+    assert!(!report.complete);
+    assert_eq!(
+        report.violations,
+        [Violation::NotSelected {
+            product: "B".into()
+        }]
+    );
+    assert!(report.fallbacks.is_empty());
+    assert!(
+        report
+            .products
+            .iter()
+            .all(|p| p.outcome == Outcome::NotAttempted)
+    );
+}

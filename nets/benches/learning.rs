@@ -1,0 +1,61 @@
+//! The learned networks at run time (batch 1, the plain `nalgebra` passes
+//! of `Networks`): a reasoner decision for 3, 5 and 20 products, a sub-goal
+//! planner call and a dynamics-policy action; with the bundled model.
+
+use std::hint::black_box;
+use std::path::Path;
+
+use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use packwright_nets::FILES;
+use packwright_nets::Networks;
+
+fn bundled() -> Networks {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/default");
+    let read = |name: &str| std::fs::read(dir.join(name)).expect("models/default is in the repo");
+    Networks::from_files(
+        &read(FILES[0]),
+        &read(FILES[1]),
+        &read(FILES[2]),
+        &read(FILES[3]),
+    )
+    .expect("the bundled model loads")
+}
+
+fn learning(c: &mut Criterion) {
+    let nets = bundled();
+    for m in [3usize, 5, 20] {
+        let nodes: Vec<[f32; 4]> = (0..m)
+            .map(|i| [0.4 + 0.05 * i as f32, -0.4, 0.03, (i % 2) as f32])
+            .collect();
+        c.bench_function(&format!("reasoner_decision_{m}_products"), |b| {
+            b.iter(|| nets.reason(black_box(&nodes), |_| [0.1, 0.62, 0.13]))
+        });
+    }
+    // Cold caches, as inside a run: the simulator works between two
+    // decisions. 8 MiB written before each call evicts L1 and L2.
+    let mut sweep = vec![0u8; 8 << 20];
+    let nodes: Vec<[f32; 4]> = (0..5)
+        .map(|i| [0.4 + 0.05 * i as f32, -0.4, 0.03, (i % 2) as f32])
+        .collect();
+    c.bench_function("reasoner_decision_5_products_cold_cache", |b| {
+        b.iter_batched(
+            || {
+                for (i, v) in sweep.iter_mut().enumerate() {
+                    *v = v.wrapping_add(i as u8);
+                }
+                black_box(sweep[sweep.len() / 2])
+            },
+            |_| nets.reason(black_box(&nodes), |_| [0.1, 0.62, 0.13]),
+            BatchSize::PerIteration,
+        )
+    });
+    c.bench_function("subgoal_planner", |b| {
+        b.iter(|| nets.subgoal(black_box([0.6, -0.4, 0.03]), [0.1, 0.6, 0.4], 0, 1))
+    });
+    c.bench_function("dynamics_action", |b| {
+        b.iter(|| nets.action(black_box([0.1, -0.2, 0.05]), [1.0, -1.4, 2.0]))
+    });
+}
+
+criterion_group!(benches, learning);
+criterion_main!(benches);

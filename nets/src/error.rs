@@ -1,0 +1,33 @@
+//! The run-time networks' error: a model directory that cannot be used.
+
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ModelError {
+    /// `config.json` is not JSON of the expected shape.
+    #[error("config.json: {reason}")]
+    Config { reason: String },
+    #[error("config.json has schema {found:?}, this packwright reads {expected:?}")]
+    Schema {
+        found: String,
+        expected: &'static str,
+    },
+    #[error("config.json describes an impossible architecture")]
+    Architecture,
+    /// A weights file is not safetensors.
+    #[error("{file} is not a safetensors file: {reason}")]
+    NotSafetensors { file: &'static str, reason: String },
+    #[error("{file} has no tensor `{tensor}`")]
+    Missing { file: &'static str, tensor: String },
+    #[error("{file}: tensor `{tensor}` is {found}, expected F32 of shape {expected:?}")]
+    Shape {
+        file: &'static str,
+        tensor: String,
+        found: String,
+        expected: Vec<usize>,
+    },
+    #[error("{file}: tensor `{tensor}` holds a value that is not finite (NaN or infinite)")]
+    NotFinite { file: &'static str, tensor: String },
+    #[error("cannot write config.json: {reason}")]
+    Write { reason: String },
+}

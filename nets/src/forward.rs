@@ -1,0 +1,326 @@
+//! The trained networks' forward passes on plain `f32` slices, for run
+//! time.
+//!
+//! burn/flex costs a few microseconds per tensor operation at batch 1 and a
+//! reasoner call is some sixty operations (≈ 200 µs measured); the same
+//! arithmetic here takes about ten. The weights are read from a model's
+//! safetensors files (`networks.rs`) or copied from the burn modules after
+//! training (`packwright-train`), and a test there checks these passes
+//! against burn's on random inputs.
+//!
+//! A dense layer is a loop over its inputs adding a weight column times
+//! the input (contiguous, so it vectorises), skipping inputs that are 0:
+//! after a ReLU about half are. With `nalgebra`'s generic `gemv` a
+//! 5-product reasoner decision took 16 µs (`cargo bench -p packwright-nets
+//! --bench learning` measures these passes).
+
+use crate::features::NODE_FEATURES;
+
+/// A dense layer: `y = W x + b`.
+#[derive(Debug, Clone)]
+pub struct Dense {
+    inputs: usize,
+    outputs: usize,
+    /// burn's layout, row-major [in, out]: the weights from input `j` are
+    /// `w[j * outputs..(j + 1) * outputs]`.
+    w: Vec<f32>,
+    b: Vec<f32>,
+}
+
+impl Dense {
+    /// From burn's `weight` (row-major [in, out]) and `bias` ([out];
+    /// `None`: zeros). `None` when the lengths do not fit.
+    pub fn new(
+        inputs: usize,
+        outputs: usize,
+        weight: Vec<f32>,
+        bias: Option<Vec<f32>>,
+    ) -> Option<Dense> {
+        let b = match bias {
+            Some(b) if b.len() == outputs => b,
+            Some(_) => return None,
+            None => vec![0.0; outputs],
+        };
+        (weight.len() == inputs * outputs).then_some(Dense {
+            inputs,
+            outputs,
+            w: weight,
+            b,
+        })
+    }
+
+    /// `W x + b` for each of the `n` rows of `x` (rows of `self.inputs`)
+    /// into the first `n` rows of `y` (rows of `self.outputs`).
+    fn apply_into(&self, x: &[f32], n: usize, y: &mut [f32]) {
+        let rows = x
+            .chunks_exact(self.inputs)
+            .zip(y.chunks_exact_mut(self.outputs));
+        for (row, out) in rows.take(n) {
+            out.copy_from_slice(&self.b);
+            for (&xj, column) in row.iter().zip(self.w.chunks_exact(self.outputs)) {
+                if xj != 0.0 {
+                    axpy(out, column, xj);
+                }
+            }
+        }
+    }
+
+    fn apply(&self, x: &[f32]) -> Vec<f32> {
+        let mut y = vec![0.0; self.outputs];
+        self.apply_into(x, 1, &mut y);
+        y
+    }
+}
+
+/// `y += a x` (vectorised: contiguous, no bounds checks in the loop).
+fn axpy(y: &mut [f32], x: &[f32], a: f32) {
+    for (y, x) in y.iter_mut().zip(x) {
+        *y += a * x;
+    }
+}
+
+fn tanh(mut x: Vec<f32>) -> Vec<f32> {
+    x.iter_mut().for_each(|v| *v = v.tanh());
+    x
+}
+
+fn argmax(v: impl Iterator<Item = f32>) -> usize {
+    v.enumerate()
+        .fold((0, f32::NEG_INFINITY), |best, (i, x)| {
+            if x > best.1 { (i, x) } else { best }
+        })
+        .0
+}
+
+/// Cache-line aligned values.
+#[repr(align(64))]
+struct Aligned<const N: usize>([f32; N]);
+
+/// `f` on `len` zeroed values: on the stack in a block of `N`, aligned to a
+/// cache line, when they fit; else on the heap.
+fn with_scratch<const N: usize, R>(len: usize, f: impl FnOnce(&mut [f32]) -> R) -> R {
+    if len <= N {
+        let mut stack = Aligned([0.0; N]);
+        f(&mut stack.0[..len])
+    } else {
+        let mut heap = vec![0.0; len];
+        f(&mut heap)
+    }
+}
+
+/// The reasoner's scratch on the stack (8 KiB): 5 products need 1,280
+/// values, 20 products 4,928 (heap).
+const REASONER_SCRATCH: usize = 2048;
+/// A multilayer perceptron's scratch on the stack: two layers of up to 128.
+const MLP_SCRATCH: usize = 256;
+
+/// `layers` in turn on `input`, a ReLU between two layers (none after the
+/// last), in stack scratch.
+fn relu_mlp(layers: &[Dense], input: &[f32]) -> Vec<f32> {
+    let width = layers
+        .iter()
+        .map(|l| l.outputs)
+        .chain([input.len()])
+        .max()
+        .unwrap_or(input.len())
+        .next_multiple_of(16);
+    let mut out = Vec::new();
+    with_scratch::<MLP_SCRATCH, _>(2 * width, |scratch| {
+        let (mut a, mut b) = scratch.split_at_mut(width);
+        a[..input.len()].copy_from_slice(input);
+        let mut n = input.len();
+        let last = layers.len().saturating_sub(1);
+        for (i, layer) in layers.iter().enumerate() {
+            layer.apply_into(&a[..n], 1, b);
+            n = layer.outputs;
+            if i < last {
+                b[..n].iter_mut().for_each(|v| *v = v.max(0.0));
+            }
+            std::mem::swap(&mut a, &mut b);
+        }
+        out.extend_from_slice(&a[..n]);
+    });
+    out
+}
+
+/// A GraphSAGE layer's two dense maps.
+#[derive(Debug, Clone)]
+pub struct SageWeights {
+    pub own: Dense,
+    pub neighbours: Dense,
+}
+
+#[derive(Debug, Clone)]
+pub struct ReasonerWeights {
+    pub layers: Vec<SageWeights>,
+    pub node_hidden: Dense,
+    pub node_score: Dense,
+    pub box_hidden: Dense,
+    pub box_score: Dense,
+    pub classifier: Vec<Dense>,
+}
+
+impl ReasonerWeights {
+    /// Node and box logits for one graph of present products, (x, y, z,
+    /// I) in inventory order; the box last. The same inputs as training's
+    /// (`data::graph_inputs`): the place along the chain is added, and a
+    /// node's neighbours are the chain's.
+    ///
+    /// Works in one cache-aligned scratch on the stack: inside a run the
+    /// allocator is as cold as the weights, and a fresh heap block can
+    /// cost page faults (measured: 16–20 µs against 19–23 µs per decision).
+    pub fn scores(&self, nodes: &[[f32; 4]]) -> Vec<f32> {
+        let m = nodes.len();
+        let width = self
+            .layers
+            .iter()
+            .map(|l| l.own.outputs)
+            .chain([
+                NODE_FEATURES,
+                self.node_hidden.outputs,
+                self.box_hidden.inputs,
+                self.box_hidden.outputs,
+            ])
+            .max()
+            .unwrap_or(NODE_FEATURES)
+            // Whole cache lines: every part of the scratch starts aligned.
+            .next_multiple_of(16);
+        let mut scores = vec![0.0f32; m + 1];
+        with_scratch::<REASONER_SCRATCH, _>(5 * m * width + 2 * width, |scratch| {
+            let (x, rest) = scratch.split_at_mut(m * width);
+            let (h, rest) = rest.split_at_mut(m * width);
+            let (mean, rest) = rest.split_at_mut(m * width);
+            let (out, rest) = rest.split_at_mut(m * width);
+            let (neighbours, rest) = rest.split_at_mut(m * width);
+            let (pooled, hidden) = rest.split_at_mut(width);
+            // The node inputs as rows: (x, y, z, I, place along the chain).
+            let last = m.saturating_sub(1).max(1) as f32;
+            let x = &mut x[..m * NODE_FEATURES];
+            for (i, (row, node)) in x.chunks_exact_mut(NODE_FEATURES).zip(nodes).enumerate() {
+                row[..4].copy_from_slice(node);
+                row[4] = i as f32 / last;
+            }
+            h[..x.len()].copy_from_slice(x);
+            let mut w = NODE_FEATURES;
+            for layer in &self.layers {
+                // The mean of each node's chain neighbours.
+                let mean = &mut mean[..m * w];
+                let rows = &h[..m * w];
+                for (i, row) in mean.chunks_exact_mut(w).enumerate() {
+                    let before = i.checked_sub(1);
+                    let after = (i + 1 < m).then_some(i + 1);
+                    let degree = [before, after].iter().flatten().count();
+                    row.fill(0.0);
+                    for j in [before, after].into_iter().flatten() {
+                        axpy(row, &rows[j * w..(j + 1) * w], 1.0 / degree as f32);
+                    }
+                }
+                let o = layer.own.outputs;
+                layer.own.apply_into(rows, m, out);
+                layer.neighbours.apply_into(mean, m, neighbours);
+                let rows = out.chunks_exact_mut(o).zip(neighbours.chunks_exact(o));
+                for (row, n) in rows.take(m) {
+                    for (v, n) in row.iter_mut().zip(n) {
+                        *v = (*v + n).max(0.0);
+                    }
+                    let norm = (row.iter().map(|v| v * v).sum::<f32>() + 1e-12).sqrt();
+                    row.iter_mut().for_each(|v| *v /= norm);
+                }
+                h[..m * o].copy_from_slice(&out[..m * o]);
+                w = o;
+            }
+            // Node scores from the nodes' own inputs.
+            let k = self.node_hidden.outputs;
+            self.node_hidden.apply_into(x, m, out);
+            out[..m * k].iter_mut().for_each(|v| *v = v.max(0.0));
+            self.node_score.apply_into(&out[..m * k], m, &mut scores);
+            // The box: max of the embeddings (>= 0) and of the raw inputs.
+            let pooled = &mut pooled[..w + NODE_FEATURES];
+            pooled.fill(f32::NEG_INFINITY);
+            for row in h[..m * w].chunks_exact(w) {
+                for (p, v) in pooled.iter_mut().zip(row) {
+                    *p = p.max(*v);
+                }
+            }
+            for row in x.chunks_exact(NODE_FEATURES) {
+                for (p, v) in pooled[w..].iter_mut().zip(row) {
+                    *p = p.max(*v);
+                }
+            }
+            if m == 0 {
+                pooled.fill(0.0);
+                pooled[w..].fill(-1e3);
+            }
+            let hidden = &mut hidden[..self.box_hidden.outputs];
+            self.box_hidden.apply_into(pooled, 1, hidden);
+            hidden.iter_mut().for_each(|v| *v = v.max(0.0));
+            self.box_score.apply_into(hidden, 1, &mut scores[m..]);
+        });
+        scores
+    }
+
+    /// The best output of `scores` (`scores.len() - 1` is the box).
+    pub fn best(scores: &[f32]) -> usize {
+        argmax(scores.iter().copied())
+    }
+
+    /// Label logits from the scores and the handled product's goal.
+    pub fn labels(&self, scores: &[f32], goal: [f32; 3]) -> Vec<f32> {
+        let top = scores.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let exp: Vec<f32> = scores.iter().map(|s| (s - top).exp()).collect();
+        let sum: f32 = exp.iter().sum();
+        let boxed = exp.last().copied().unwrap_or(0.0) / sum;
+        let node = exp[..exp.len().saturating_sub(1)]
+            .iter()
+            .copied()
+            .fold(f32::NEG_INFINITY, f32::max)
+            / sum;
+        relu_mlp(&self.classifier, &[boxed, node, goal[0], goal[1], goal[2]])
+    }
+
+    pub fn label(&self, scores: &[f32], goal: [f32; 3]) -> usize {
+        argmax(self.labels(scores, goal).into_iter())
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct SubGoalWeights {
+    pub hidden: Vec<Dense>,
+    pub latent_mean: Dense,
+    pub decoder: Dense,
+    pub mean: Dense,
+}
+
+impl SubGoalWeights {
+    /// The Gaussian head's mean with the latent at its mean (run time).
+    pub fn mean(&self, input: &[f32]) -> [f32; 3] {
+        let mut h = input.to_vec();
+        for layer in &self.hidden {
+            h = tanh(layer.apply(&h));
+        }
+        let z = self.latent_mean.apply(&h);
+        h.extend(z);
+        let d = tanh(self.decoder.apply(&h));
+        let out = self.mean.apply(&d);
+        std::array::from_fn(|j| out.get(j).copied().unwrap_or(0.0))
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct DynamicsWeights {
+    pub layers: Vec<Dense>,
+}
+
+impl DynamicsWeights {
+    /// Fractions of the largest step for (delta, joints), minus the output
+    /// at delta 0.
+    pub fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
+        let [a, b, c] = delta;
+        let [d, e, f] = joints;
+        let moved = relu_mlp(&self.layers, &[a, b, c, d, e, f]);
+        let still = relu_mlp(&self.layers, &[0.0, 0.0, 0.0, d, e, f]);
+        std::array::from_fn(|j| {
+            moved.get(j).copied().unwrap_or(0.0) - still.get(j).copied().unwrap_or(0.0)
+        })
+    }
+}

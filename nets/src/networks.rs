@@ -1,0 +1,260 @@
+//! A trained model at run time: the three networks as plain `f32` layers,
+//! read from a model directory's files (`config.json` and three
+//! safetensors files, the layout `packwright-train` writes: a dense
+//! layer's `weight` is [inputs, outputs] row-major and its `bias`
+//! [outputs]). Every tensor is checked on load: present, F32, the shape
+//! `config.json` implies, finite.
+
+use crate::config::{ModelConfig, SCHEMA, SavedConfig, Task, TrainConfig};
+use crate::error::ModelError;
+use crate::features::{ACTION_SCALE, NODE_FEATURES, subgoal_input, subgoal_width};
+use crate::forward::{Dense, DynamicsWeights, ReasonerWeights, SageWeights, SubGoalWeights};
+use packwright_interface::{Choice, Policy};
+use safetensors::{Dtype, SafeTensors};
+
+/// The three networks' run-time weights.
+#[derive(Debug, Clone)]
+pub struct Weights {
+    pub reasoner: ReasonerWeights,
+    pub subgoal: SubGoalWeights,
+    pub dynamics: DynamicsWeights,
+}
+
+/// A trained model: what it is, how it was trained, what it was taught,
+/// and its weights.
+#[derive(Debug, Clone)]
+pub struct Networks {
+    pub config: ModelConfig,
+    pub training: TrainConfig,
+    pub task: Task,
+    weights: Weights,
+}
+
+/// One weights file, read tensor by tensor.
+struct File<'a> {
+    name: &'static str,
+    tensors: SafeTensors<'a>,
+}
+
+impl File<'_> {
+    /// The dense layer `prefix` (`prefix.weight`, `prefix.bias`) with
+    /// `inputs` × `outputs` weights.
+    fn dense(&self, prefix: &str, inputs: usize, outputs: usize) -> Result<Dense, ModelError> {
+        let weight = self.tensor(&format!("{prefix}.weight"), &[inputs, outputs])?;
+        let bias = self.tensor(&format!("{prefix}.bias"), &[outputs])?;
+        Dense::new(inputs, outputs, weight, Some(bias)).ok_or(ModelError::Architecture)
+    }
+
+    fn tensor(&self, name: &str, shape: &[usize]) -> Result<Vec<f32>, ModelError> {
+        let t = self.tensors.tensor(name).map_err(|_| ModelError::Missing {
+            file: self.name,
+            tensor: name.to_owned(),
+        })?;
+        if t.dtype() != Dtype::F32 || t.shape() != shape {
+            return Err(ModelError::Shape {
+                file: self.name,
+                tensor: name.to_owned(),
+                found: format!("{:?} of shape {:?}", t.dtype(), t.shape()),
+                expected: shape.to_vec(),
+            });
+        }
+        let values: Vec<f32> = t
+            .data()
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err(ModelError::NotFinite {
+                file: self.name,
+                tensor: name.to_owned(),
+            });
+        }
+        Ok(values)
+    }
+}
+
+fn open<'a>(name: &'static str, bytes: &'a [u8]) -> Result<File<'a>, ModelError> {
+    let tensors = SafeTensors::deserialize(bytes).map_err(|e| ModelError::NotSafetensors {
+        file: name,
+        reason: e.to_string(),
+    })?;
+    Ok(File { name, tensors })
+}
+
+fn denses(file: &File, prefix: &str, sizes: &[(usize, usize)]) -> Result<Vec<Dense>, ModelError> {
+    sizes
+        .iter()
+        .enumerate()
+        .map(|(i, &(a, b))| file.dense(&format!("{prefix}.{i}"), a, b))
+        .collect()
+}
+
+impl Networks {
+    /// A model from its parts (after training).
+    pub fn new(
+        config: ModelConfig,
+        training: TrainConfig,
+        task: Task,
+        weights: Weights,
+    ) -> Networks {
+        Networks {
+            config,
+            training,
+            task,
+            weights,
+        }
+    }
+
+    /// The run-time weights.
+    pub fn weights(&self) -> &Weights {
+        &self.weights
+    }
+
+    /// `config.json`'s bytes for this model.
+    pub fn config_json(&self) -> Result<Vec<u8>, ModelError> {
+        let saved = SavedConfig {
+            schema: SCHEMA.into(),
+            model: self.config.clone(),
+            training: self.training.clone(),
+            task: self.task.clone(),
+        };
+        serde_json::to_vec_pretty(&saved).map_err(|e| ModelError::Write {
+            reason: e.to_string(),
+        })
+    }
+
+    /// Reads a model from the bytes of its files (see
+    /// [`FILES`](crate::config::FILES)), checking every tensor.
+    pub fn from_files(
+        config: &[u8],
+        reasoner: &[u8],
+        subgoal: &[u8],
+        dynamics: &[u8],
+    ) -> Result<Networks, ModelError> {
+        let saved: SavedConfig =
+            serde_json::from_slice(config).map_err(|e| ModelError::Config {
+                reason: e.to_string(),
+            })?;
+        if saved.schema != SCHEMA {
+            return Err(ModelError::Schema {
+                found: saved.schema,
+                expected: SCHEMA,
+            });
+        }
+        let c = &saved.model;
+        let widths = [
+            c.labels,
+            c.graph_hidden,
+            c.classifier_hidden,
+            c.subgoal_hidden,
+            c.subgoal_latent,
+            c.dynamics_hidden,
+        ];
+        if widths.iter().any(|&w| w == 0 || w > 4096) || !(1..=64).contains(&c.graph_layers) {
+            return Err(ModelError::Architecture);
+        }
+        let (h, k) = (c.graph_hidden, c.classifier_hidden);
+        let r = open("reasoner.safetensors", reasoner)?;
+        let layers = (0..c.graph_layers)
+            .map(|i| {
+                let inputs = if i == 0 { NODE_FEATURES } else { h };
+                Ok(SageWeights {
+                    own: r.dense(&format!("layers.{i}.own"), inputs, h)?,
+                    neighbours: r.dense(&format!("layers.{i}.neighbours"), inputs, h)?,
+                })
+            })
+            .collect::<Result<_, ModelError>>()?;
+        let reasoner = ReasonerWeights {
+            layers,
+            node_hidden: r.dense("node_hidden", NODE_FEATURES, h)?,
+            node_score: r.dense("node_score", h, 1)?,
+            box_hidden: r.dense("box_hidden", h + NODE_FEATURES, h)?,
+            box_score: r.dense("box_score", h, 1)?,
+            classifier: denses(&r, "classifier", &[(5, k), (k, k), (k, c.labels)])?,
+        };
+        let (h, z) = (c.subgoal_hidden, c.subgoal_latent);
+        let s = open("subgoal.safetensors", subgoal)?;
+        let subgoal = SubGoalWeights {
+            hidden: denses(&s, "hidden", &[(subgoal_width(c.labels), h), (h, h)])?,
+            latent_mean: s.dense("latent_mean", h, z)?,
+            decoder: s.dense("decoder", h + z, h)?,
+            mean: s.dense("mean", h, 3)?,
+        };
+        let h = c.dynamics_hidden;
+        let d = open("dynamics.safetensors", dynamics)?;
+        let dynamics = DynamicsWeights {
+            layers: denses(&d, "layers", &[(6, h), (h, h), (h, 3)])?,
+        };
+        Ok(Networks {
+            config: saved.model,
+            training: saved.training,
+            task: saved.task,
+            weights: Weights {
+                reasoner,
+                subgoal,
+                dynamics,
+            },
+        })
+    }
+
+    /// The reasoner: which node to pick (or the box), then the label given
+    /// the handled product's goal, `goal_of(node)` (`None`: the held
+    /// product's).
+    pub fn reason(
+        &self,
+        nodes: &[[f32; 4]],
+        goal_of: impl FnOnce(Option<usize>) -> [f32; 3],
+    ) -> Choice {
+        let r = &self.weights.reasoner;
+        let scores = r.scores(nodes);
+        let best = ReasonerWeights::best(&scores);
+        let node = (best < nodes.len()).then_some(best);
+        let label = r.label(&scores, goal_of(node));
+        Choice { node, label }
+    }
+
+    /// The sub-goal planner's mean: the next tool-tip position.
+    pub fn subgoal(
+        &self,
+        feature: [f32; 3],
+        tool: [f32; 3],
+        label: usize,
+        index: usize,
+    ) -> [f32; 3] {
+        let labels = self.config.labels;
+        let mut x = Vec::with_capacity(subgoal_width(labels));
+        subgoal_input(
+            &mut x,
+            feature,
+            tool,
+            label.min(labels - 1),
+            index.min(2),
+            labels,
+        );
+        let v = self.weights.subgoal.mean(&x);
+        std::array::from_fn(|j| feature[j] + v[j])
+    }
+
+    /// The dynamics policy: base, shoulder and elbow steps (radians) for
+    /// `delta` = sub-goal − tool tip at those joints.
+    pub fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
+        self.weights
+            .dynamics
+            .action(delta, joints)
+            .map(|a| a * ACTION_SCALE)
+    }
+}
+
+impl Policy for Networks {
+    fn reason(&self, nodes: &[[f32; 4]], goal_of: &dyn Fn(Option<usize>) -> [f32; 3]) -> Choice {
+        Networks::reason(self, nodes, goal_of)
+    }
+
+    fn subgoal(&self, feature: [f32; 3], tool: [f32; 3], label: usize, index: usize) -> [f32; 3] {
+        Networks::subgoal(self, feature, tool, label, index)
+    }
+
+    fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
+        Networks::action(self, delta, joints)
+    }
+}

@@ -1,0 +1,270 @@
+//! From the compiler's model (or its compiled artifacts) to the robot
+//! half's terms: a cell scene, the inventory's product specs, an order's
+//! assignment and the products' start placements. (The robot crates do
+//! not depend on the compiler.)
+
+use crate::error::{PipelineError, Result};
+use packwright_compiler::Compiled;
+use packwright_compiler::artifact::{CellRecord, DemonstrationRecord, RobotRecord, WorldFile};
+use packwright_compiler::emit::cell_record;
+use packwright_compiler::expand::Setup;
+use packwright_compiler::model::Model;
+use packwright_interface::OrderTask;
+use packwright_interface::scene::{
+    BoxSpec, CellScene, DEFAULT_MASS, Placement, ProductSpec, SlotSpec,
+};
+use packwright_kinematics::{Arm, Joints, from_urdf};
+use packwright_motion::execute;
+use packwright_sim::Simulator;
+
+/// What `execute` needs: the arm, the task and where products start.
+pub struct Episode {
+    pub arm: Arm,
+    pub task: OrderTask,
+    pub placements: Vec<Placement>,
+}
+
+impl Episode {
+    /// The arm's start pose (over the pending area).
+    pub fn home(&self) -> Result<Joints> {
+        execute::home(&self.arm, &self.task.cell).ok_or_else(|| PipelineError::NoStartPose {
+            cell: self.cell_name().to_owned(),
+        })
+    }
+
+    /// A fresh simulation of the episode with the arm at `start`.
+    pub fn simulator(&self, start: Joints) -> Result<Simulator> {
+        Ok(Simulator::new(
+            self.arm.clone(),
+            &self.task.cell,
+            &self.placements,
+            start,
+        )?)
+    }
+
+    fn cell_name(&self) -> &str {
+        &self.task.cell.name
+    }
+}
+
+/// The runtime's scene of a cell, from its compiled record (the same for
+/// `execute`, which compiles in memory, and `demonstrate`, which reads
+/// `orders.json`).
+pub fn scene_of(cell: &CellRecord) -> CellScene {
+    CellScene {
+        name: cell.name.clone(),
+        base: cell.base,
+        suction: cell.suction,
+        lift: cell.lift,
+        pending: (cell.pending.min, cell.pending.max),
+        boxes: cell
+            .boxes
+            .iter()
+            .map(|b| BoxSpec {
+                name: b.name.clone(),
+                centre: b.centre,
+                size: b.size,
+            })
+            .collect(),
+        slots: cell
+            .slots
+            .iter()
+            .map(|s| SlotSpec {
+                name: s.name.clone(),
+                position: s.position,
+                box_index: cell
+                    .boxes
+                    .iter()
+                    .position(|b| b.name == s.box_name)
+                    .unwrap_or(0),
+            })
+            .collect(),
+    }
+}
+
+/// The arm a cell names: the built-in UR10, or a URDF file.
+pub fn arm_of(robot: &RobotRecord) -> Result<Arm> {
+    match robot {
+        RobotRecord::Ur10 => Ok(Arm::ur10()),
+        RobotRecord::Urdf(path) => {
+            let text = std::fs::read_to_string(path).map_err(|e| PipelineError::Read {
+                path: path.into(),
+                reason: e.to_string(),
+            })?;
+            from_urdf(&text).map_err(|source| PipelineError::Urdf {
+                path: path.clone(),
+                source,
+            })
+        }
+    }
+}
+
+/// The episode of a setup (an order's, or a scenario case's).
+pub fn episode(m: &Model, setup: &Setup) -> Result<Episode> {
+    let inv = &m.inventories[setup.inventory];
+    let products: Vec<ProductSpec> = inv
+        .entries
+        .iter()
+        .map(|e| {
+            let p = &m.products[e.product];
+            ProductSpec {
+                name: p.name.clone(),
+                size: p.size,
+                mass: p.mass.unwrap_or(DEFAULT_MASS),
+            }
+        })
+        .collect();
+    let cell = cell_record(&m.cells[inv.cell]);
+    let task = OrderTask {
+        cell: scene_of(&cell),
+        products,
+        assignment: setup.assignment.clone(),
+    };
+    let placements = (0..inv.entries.len())
+        .filter(|e| !setup.missing.contains(e))
+        .map(|e| {
+            let spec = task.products[e].clone();
+            let centre = match setup.slot_of(e) {
+                Some(s) if setup.human_packed.contains(&e) => task.goal(e, s),
+                _ => [
+                    setup.positions[e][0],
+                    setup.positions[e][1],
+                    spec.size[2] / 2.0,
+                ],
+            };
+            Placement {
+                product: spec,
+                centre,
+            }
+        })
+        .collect();
+    Ok(Episode {
+        arm: arm_of(&cell.robot)?,
+        task,
+        placements,
+    })
+}
+
+/// The setup named by `--order` or `--scenario`.
+pub fn find_setup(
+    c: &Compiled,
+    order: Option<&str>,
+    scenario: Option<&str>,
+) -> Result<(String, Setup)> {
+    let m = &c.model;
+    if let Some(name) = scenario {
+        for suite in &c.expanded.suites {
+            if let Some(case) = suite.cases.iter().find(|k| k.name == name) {
+                return Ok((case.name.clone(), case.setup.clone()));
+            }
+        }
+        let known: Vec<&str> = c
+            .expanded
+            .suites
+            .iter()
+            .flat_map(|s| s.cases.first().map(|k| k.name.as_str()))
+            .collect();
+        return Err(PipelineError::NoSuch {
+            what: "scenario",
+            name: name.to_owned(),
+            known: format!("scenarios are named like: {}", known.join(", ")),
+        });
+    }
+    let Some(name) = order else {
+        return Err(PipelineError::Selection(
+            "give --order NAME or --scenario NAME".into(),
+        ));
+    };
+    let Some(o) = m.orders.iter().find(|o| o.name == name) else {
+        let known: Vec<&str> = m.orders.iter().map(|o| o.name.as_str()).collect();
+        return Err(PipelineError::NoSuch {
+            what: "order",
+            name: name.to_owned(),
+            known: format!("known orders: {}", known.join(", ")),
+        });
+    };
+    let inv = &m.inventories[o.inventory];
+    Ok((
+        o.name.clone(),
+        Setup {
+            inventory: o.inventory,
+            assignment: o.assignment.iter().map(|a| (a.entry, a.slot)).collect(),
+            human_packed: Vec::new(),
+            missing: Vec::new(),
+            positions: inv.entries.iter().map(|e| e.at).collect(),
+        },
+    ))
+}
+
+/// The episode of a compiled demonstration (from the artifacts): the
+/// assignment in the demonstrated sequence, then the products a worker had
+/// packed.
+pub fn demonstration_episode(world: &WorldFile, demo: &DemonstrationRecord) -> Result<Episode> {
+    let unknown = |what, name: &str| PipelineError::Unknown {
+        file: "orders.json",
+        what,
+        name: name.to_owned(),
+    };
+    let cell = world
+        .cells
+        .iter()
+        .find(|c| c.name == demo.cell)
+        .ok_or_else(|| unknown("cell", &demo.cell))?;
+    let inv = world
+        .inventories
+        .iter()
+        .find(|i| i.name == demo.inventory)
+        .ok_or_else(|| unknown("inventory", &demo.inventory))?;
+    let scene = scene_of(cell);
+    let products = inv
+        .products
+        .iter()
+        .map(|at| {
+            let p = world
+                .products
+                .iter()
+                .find(|p| p.name == at.product)
+                .ok_or_else(|| unknown("product", &at.product))?;
+            Ok(ProductSpec {
+                name: p.name.clone(),
+                size: p.size,
+                mass: p.mass.unwrap_or(DEFAULT_MASS),
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let index = |name: &str| products.iter().position(|p| p.name == name);
+    let slot_of = |name: &str| {
+        demo.assignment
+            .iter()
+            .find(|a| a.product == name)
+            .and_then(|a| scene.slots.iter().position(|s| s.name == a.slot))
+    };
+    let mut assignment = Vec::new();
+    for name in demo.sequence.iter().chain(&demo.human_packed) {
+        match (index(name), slot_of(name)) {
+            (Some(p), Some(s)) => assignment.push((p, s)),
+            _ => return Err(unknown("product of a demonstration", name)),
+        }
+    }
+    let placements = demo
+        .start
+        .iter()
+        .map(|at| {
+            let p = index(&at.product).ok_or_else(|| unknown("product", &at.product))?;
+            Ok(Placement {
+                product: products[p].clone(),
+                centre: at.at,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let arm = arm_of(&cell.robot)?;
+    Ok(Episode {
+        arm,
+        task: OrderTask {
+            cell: scene,
+            products,
+            assignment,
+        },
+        placements,
+    })
+}

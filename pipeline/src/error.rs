@@ -1,0 +1,44 @@
+//! The pipeline's error.
+
+use packwright_kinematics::UrdfError;
+use packwright_nets::ModelError;
+use packwright_sim::SimError;
+use std::path::PathBuf;
+use thiserror::Error;
+
+#[derive(Debug, Error)]
+pub enum PipelineError {
+    #[error("cannot read {path}: {reason}")]
+    Read { path: PathBuf, reason: String },
+    /// A compiled artifact that does not hold what its schema says.
+    #[error("{file}: {problem}")]
+    Artifact { file: String, problem: String },
+    #[error("{file} has no {what} `{name}`")]
+    Unknown {
+        file: &'static str,
+        what: &'static str,
+        name: String,
+    },
+    #[error("robot description {path}: {source}")]
+    Urdf { path: String, source: UrdfError },
+    #[error("the arm cannot reach a start pose over the pending area of cell `{cell}`")]
+    NoStartPose { cell: String },
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    #[error("{what}: {source}")]
+    Model { what: String, source: ModelError },
+    #[error(
+        "the model was trained on cell `{taught}`, this order packs in cell `{cell}`: train a model on its demonstrations (`packwright train`)"
+    )]
+    OtherCell { taught: String, cell: String },
+    #[error("no {what} `{name}`; {known}")]
+    NoSuch {
+        what: &'static str,
+        name: String,
+        known: String,
+    },
+    #[error("{0}")]
+    Selection(String),
+}
+
+pub type Result<T, E = PipelineError> = std::result::Result<T, E>;

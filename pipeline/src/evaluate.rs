@@ -1,0 +1,268 @@
+//! Evaluation: one scenario run by each planner, and the success rates and
+//! timings of a suite (one [`Row`] per suite and planner).
+
+use crate::episode::episode;
+use crate::error::Result;
+use crate::stats::{Interval, mean, quantile, wilson};
+use packwright_compiler::Compiled;
+use packwright_compiler::expand::Setup;
+use packwright_interface::World;
+use packwright_interface::outcome::{FallbackKind, Outcome, PlannerKind, Report, Timing};
+use packwright_motion::execute::{self, Planner};
+use packwright_nets::Networks;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// One planner's run of one scenario.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// Every present selected product packed (missing ones reported as
+    /// waiting), nothing collided, no order broken.
+    pub success: bool,
+    /// Why not, when not.
+    pub failure: Option<String>,
+    /// Stages handed to RRT-Connect.
+    pub fallbacks: Vec<FallbackKind>,
+    pub violations: usize,
+    pub timing: Timing,
+    /// Simulated seconds per product the robot packed.
+    pub execution_s: Vec<f64>,
+}
+
+impl Run {
+    pub fn of(r: &Report) -> Run {
+        let failure = r.first_problem();
+        Run {
+            success: failure.is_none(),
+            failure,
+            fallbacks: r.fallbacks.iter().map(|f| f.kind()).collect(),
+            violations: r.violations.len(),
+            timing: r.timing.clone(),
+            execution_s: r
+                .products
+                .iter()
+                .filter(|p| p.outcome == Outcome::Packed)
+                .map(|p| p.execution_s)
+                .collect(),
+        }
+    }
+}
+
+/// Every planner's run of one scenario.
+#[derive(Debug, Clone, Default)]
+pub struct CaseResult {
+    pub name: String,
+    /// Every reasoner decision right (with a learned model only).
+    pub reasoner: Option<bool>,
+    pub runs: Vec<(PlannerKind, Run)>,
+}
+
+/// Runs scenario `name` (`setup`) with each of `planners`; the learned
+/// planner needs `nets`. With `reasoner_only`, only the reasoner's
+/// decisions are replayed.
+pub fn run_case(
+    name: &str,
+    compiled: &Compiled,
+    setup: &Setup,
+    nets: Option<&Networks>,
+    planners: &[PlannerKind],
+    seed: u64,
+    reasoner_only: bool,
+) -> Result<CaseResult> {
+    let ep = episode(&compiled.model, setup)?;
+    let start = ep.home()?;
+    let mut result = CaseResult {
+        name: name.to_owned(),
+        ..CaseResult::default()
+    };
+    if let Some(nets) = nets {
+        let seen = ep.simulator(start)?.observe().products;
+        result.reasoner = Some(execute::reasoner_trial(nets, &ep.task, &seen).is_ok());
+    }
+    if reasoner_only {
+        return Ok(result);
+    }
+    for &kind in planners {
+        let planner = match (kind, nets) {
+            (PlannerKind::Learned, Some(nets)) => Planner::Learned { policy: nets, seed },
+            (PlannerKind::Learned, None) => continue,
+            (PlannerKind::Rrt, _) => Planner::Rrt { seed },
+            (PlannerKind::Expert, _) => Planner::Expert,
+        };
+        let mut sim = ep.simulator(start)?;
+        let report = execute::run(&mut sim, &ep.arm, &ep.task, &planner);
+        result.runs.push((kind, Run::of(&report)));
+    }
+    Ok(result)
+}
+
+/// Median, 99th percentile and count of some timings (µs).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Spread {
+    pub median: Option<f64>,
+    pub p99: Option<f64>,
+    pub n: usize,
+}
+
+impl Spread {
+    fn of(values: &[f64]) -> Spread {
+        Spread {
+            median: quantile(values, 0.5),
+            p99: quantile(values, 0.99),
+            n: values.len(),
+        }
+    }
+}
+
+/// A rate with its Wilson 95% interval.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Rate {
+    pub rate: f64,
+    pub ci95: Interval,
+}
+
+impl Rate {
+    fn of(k: usize, n: usize) -> Option<Rate> {
+        (n > 0).then(|| Rate {
+            rate: k as f64 / n as f64,
+            ci95: wilson(k, n),
+        })
+    }
+}
+
+/// A failed scenario and why.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CaseFailure {
+    pub scenario: String,
+    pub why: String,
+}
+
+/// One suite × planner.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Row {
+    pub suite: String,
+    pub planner: PlannerKind,
+    pub scenarios: usize,
+    /// Learned only: every reasoner decision of a scenario right.
+    pub reasoner_sr: Option<Rate>,
+    pub reasoner_scenarios: usize,
+    pub sr: Option<Rate>,
+    /// Learned only: success with no fallback.
+    pub sr_no_fallback: Option<Rate>,
+    pub fallbacks_per_package: Option<f64>,
+    /// Fallbacks by kind ("placing 3: short").
+    pub fallback_kinds: BTreeMap<String, usize>,
+    pub violations: usize,
+    pub decision_us: Spread,
+    pub subgoal_us: Spread,
+    pub network_us: Spread,
+    pub failures: Vec<CaseFailure>,
+    pub execution_s_per_product: Option<f64>,
+}
+
+impl Row {
+    /// The row of `planner` over the results of one suite.
+    pub fn of(suite: &str, planner: PlannerKind, cases: &[CaseResult]) -> Row {
+        let runs: Vec<(&str, &Run)> = cases
+            .iter()
+            .flat_map(|c| {
+                c.runs
+                    .iter()
+                    .filter(|(p, _)| *p == planner)
+                    .map(|(_, r)| (c.name.as_str(), r))
+            })
+            .collect();
+        let n = runs.len();
+        let ok = runs.iter().filter(|(_, r)| r.success).count();
+        let clean = runs
+            .iter()
+            .filter(|(_, r)| r.success && r.fallbacks.is_empty())
+            .count();
+        let learned = planner == PlannerKind::Learned;
+        let reasoner: Vec<bool> = if learned {
+            cases.iter().filter_map(|c| c.reasoner).collect()
+        } else {
+            Vec::new()
+        };
+        let all = |f: fn(&Timing) -> &Vec<f64>| -> Vec<f64> {
+            runs.iter()
+                .flat_map(|(_, r)| f(&r.timing).iter().copied())
+                .collect()
+        };
+        let mut kinds = BTreeMap::new();
+        for kind in runs.iter().flat_map(|(_, r)| r.fallbacks.iter()) {
+            *kinds.entry(kind.to_string()).or_default() += 1;
+        }
+        Row {
+            suite: suite.to_owned(),
+            planner,
+            scenarios: n.max(reasoner.len()),
+            reasoner_sr: Rate::of(reasoner.iter().filter(|r| **r).count(), reasoner.len()),
+            reasoner_scenarios: reasoner.len(),
+            sr: Rate::of(ok, n),
+            sr_no_fallback: if learned { Rate::of(clean, n) } else { None },
+            fallbacks_per_package: (learned && n > 0).then(|| {
+                runs.iter().map(|(_, r)| r.fallbacks.len()).sum::<usize>() as f64 / n as f64
+            }),
+            fallback_kinds: kinds,
+            violations: runs.iter().map(|(_, r)| r.violations).sum(),
+            decision_us: Spread::of(&all(|t| &t.decision_us)),
+            subgoal_us: Spread::of(&all(|t| &t.subgoal_us)),
+            network_us: Spread::of(&all(|t| &t.network_us)),
+            failures: runs
+                .iter()
+                .filter_map(|(name, r)| {
+                    r.failure.as_ref().map(|why| CaseFailure {
+                        scenario: (*name).to_owned(),
+                        why: why.clone(),
+                    })
+                })
+                .collect(),
+            execution_s_per_product: mean(
+                &runs
+                    .iter()
+                    .flat_map(|(_, r)| r.execution_s.iter().copied())
+                    .collect::<Vec<_>>(),
+            ),
+        }
+    }
+}
+
+fn rate(r: &Option<Rate>) -> String {
+    r.map_or("-".into(), |r| {
+        format!("{:.3} [{:.3}, {:.3}]", r.rate, r.ci95.0, r.ci95.1)
+    })
+}
+
+fn micros(s: &Spread) -> String {
+    match (s.median, s.p99) {
+        (Some(m), Some(p)) => format!("{m:.0} / {p:.0}"),
+        _ => "-".into(),
+    }
+}
+
+/// The Markdown table of `rows`.
+pub fn markdown(rows: &[Row]) -> String {
+    let mut out = String::from(
+        "| suite | planner | n | reasoner SR | SR [95% CI] | SR no fallback | fallbacks/package | decision us (median / p99) | sub-goal us (median / p99) | sub-goal + action us (median / p99) | execution s/product |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        out.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.suite,
+            r.planner,
+            r.scenarios,
+            rate(&r.reasoner_sr),
+            rate(&r.sr),
+            rate(&r.sr_no_fallback),
+            r.fallbacks_per_package
+                .map_or("-".into(), |v| format!("{v:.2}")),
+            micros(&r.decision_us),
+            micros(&r.subgoal_us),
+            micros(&r.network_us),
+            r.execution_s_per_product
+                .map_or("-".into(), |v| format!("{v:.2}")),
+        ));
+    }
+    out
+}

@@ -1,0 +1,76 @@
+//! Model directories on disk, the bundled model (`models/default/`,
+//! compiled into the binary), and which planner packs a cell.
+
+use crate::error::{PipelineError, Result};
+use packwright_interface::PlannerKind;
+use packwright_nets::{FILES, Networks};
+use std::path::Path;
+
+/// The bundled model (`models/default/`), trained by `packwright train`
+/// on `orders/` (`scripts/train-default.sh`).
+const DEFAULT: [&[u8]; 4] = [
+    include_bytes!("../../models/default/config.json"),
+    include_bytes!("../../models/default/reasoner.safetensors"),
+    include_bytes!("../../models/default/subgoal.safetensors"),
+    include_bytes!("../../models/default/dynamics.safetensors"),
+];
+
+pub fn default_model() -> Result<Networks> {
+    Networks::from_files(DEFAULT[0], DEFAULT[1], DEFAULT[2], DEFAULT[3]).map_err(|source| {
+        PipelineError::Model {
+            what: "the bundled default model".into(),
+            source,
+        }
+    })
+}
+
+/// A model directory written by `packwright train`.
+pub fn load_model(dir: &Path) -> Result<Networks> {
+    let read = |name: &str| {
+        let path = dir.join(name);
+        std::fs::read(&path).map_err(|e| PipelineError::Read {
+            reason: format!("{e} (a model directory holds the files `packwright train` writes)"),
+            path,
+        })
+    };
+    Networks::from_files(
+        &read(FILES[0])?,
+        &read(FILES[1])?,
+        &read(FILES[2])?,
+        &read(FILES[3])?,
+    )
+    .map_err(|source| PipelineError::Model {
+        what: format!("{} is not a usable model", dir.display()),
+        source,
+    })
+}
+
+/// The planner to use for an order in `cell` and, for the learned one, its
+/// networks: `model` when given, else the bundled model when it was taught
+/// that cell (or when `asked` for explicitly).
+pub fn choose_planner(
+    asked: Option<PlannerKind>,
+    model: Option<&Path>,
+    cell: &str,
+) -> Result<(PlannerKind, Option<Networks>)> {
+    let nets = match (asked, model) {
+        (Some(PlannerKind::Expert | PlannerKind::Rrt), _) => None,
+        (_, Some(dir)) => Some(load_model(dir)?),
+        (Some(PlannerKind::Learned), None) => Some(default_model()?),
+        (None, None) => default_model().ok().filter(|n| n.task.cell == cell),
+    };
+    if let Some(n) = &nets
+        && n.task.cell != cell
+    {
+        return Err(PipelineError::OtherCell {
+            taught: n.task.cell.clone(),
+            cell: cell.to_owned(),
+        });
+    }
+    let planner = match (asked, &nets) {
+        (Some(p), _) => p,
+        (None, Some(_)) => PlannerKind::Learned,
+        (None, None) => PlannerKind::Expert,
+    };
+    Ok((planner, nets))
+}

@@ -1,0 +1,66 @@
+//! Expert replays of compiled demonstrations (motion demonstrations), and
+//! the sub-goal planner's and dynamics policy's examples from them.
+
+use crate::episode::demonstration_episode;
+use crate::error::Result;
+use packwright_compiler::artifact::{DemonstrationRecord, WorldFile};
+use packwright_interface::record::MotionLog;
+use packwright_motion::execute;
+use packwright_nets::{ActionExample, SubGoalExample};
+use rayon::prelude::*;
+
+/// One demonstration replayed by the expert: its motion log, or `None` if
+/// the expert could not complete it.
+pub fn replay(world: &WorldFile, demo: &DemonstrationRecord) -> Result<Option<MotionLog>> {
+    let ep = demonstration_episode(world, demo)?;
+    let mut sim = ep.simulator(ep.home()?)?;
+    let mut log = MotionLog::default();
+    let report = execute::run_recorded(&mut sim, &ep.arm, &ep.task, &mut log);
+    Ok(report.complete.then_some(log))
+}
+
+/// Replays `demos` in parallel (rayon); `tick` is called after each. The
+/// logs come back in the order of `demos`.
+pub fn replay_all(
+    world: &WorldFile,
+    demos: &[&DemonstrationRecord],
+    tick: &(dyn Fn() + Sync),
+) -> Result<Vec<Option<MotionLog>>> {
+    demos
+        .par_iter()
+        .map(|d| {
+            let r = replay(world, d);
+            tick();
+            r
+        })
+        .collect()
+}
+
+fn f32s(v: [f64; 3]) -> [f32; 3] {
+    v.map(|x| x as f32)
+}
+
+/// The sub-goal planner's and the dynamics policy's examples of one log.
+pub fn motion_examples(log: &MotionLog) -> (Vec<SubGoalExample>, Vec<ActionExample>) {
+    let subgoals = log
+        .subgoals
+        .iter()
+        .map(|s| SubGoalExample {
+            feature: f32s(s.feature),
+            tool: f32s(s.tool),
+            label: s.label as usize,
+            index: usize::from(s.index),
+            target: f32s(s.target),
+        })
+        .collect();
+    let actions = log
+        .actions
+        .iter()
+        .map(|a| ActionExample {
+            delta: f32s(a.delta),
+            joints: f32s(a.joints),
+            action: f32s(a.action),
+        })
+        .collect();
+    (subgoals, actions)
+}

@@ -1,0 +1,179 @@
+//! A freshly trained model: the burn modules (whose safetensors files
+//! `packwright-nets` reads) and the same weights as run-time networks.
+
+use crate::model::{DynamicsPolicy, Reasoner, SubGoalPlanner};
+use burn::store::{ModuleSnapshot, SafetensorsStore};
+use packwright_nets::config::FILES;
+use packwright_nets::{ModelConfig, ModelError, Networks, Task, TrainConfig, Weights};
+
+/// The three trained modules and their run-time twin.
+#[derive(Debug, Clone)]
+pub struct Trained {
+    reasoner: Reasoner,
+    subgoal: SubGoalPlanner,
+    dynamics: DynamicsPolicy,
+    /// The run-time networks (the same weights as plain numbers).
+    pub networks: Networks,
+}
+
+/// Why a trained model could not be turned into files or networks.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SaveError {
+    #[error("cannot read the trained weights' values")]
+    Values,
+    #[error("cannot serialise the weights of {file}: {reason}")]
+    Serialise { file: &'static str, reason: String },
+    #[error(transparent)]
+    Model(#[from] ModelError),
+}
+
+fn save<M: ModuleSnapshot>(m: &M, file: &'static str) -> Result<Vec<u8>, SaveError> {
+    let mut store = SafetensorsStore::from_bytes(None);
+    let fail = |e: &dyn std::fmt::Display| SaveError::Serialise {
+        file,
+        reason: e.to_string(),
+    };
+    m.save_into(&mut store).map_err(|e| fail(&e))?;
+    store.get_bytes().map_err(|e| fail(&e))
+}
+
+impl Trained {
+    pub(crate) fn new(
+        config: ModelConfig,
+        training: TrainConfig,
+        reasoner: Reasoner,
+        subgoal: SubGoalPlanner,
+        dynamics: DynamicsPolicy,
+    ) -> Result<Trained, SaveError> {
+        let weights = (|| {
+            Some(Weights {
+                reasoner: reasoner.weights()?,
+                subgoal: subgoal.weights()?,
+                dynamics: dynamics.weights()?,
+            })
+        })()
+        .ok_or(SaveError::Values)?;
+        Ok(Trained {
+            networks: Networks::new(config, training, Task::default(), weights),
+            reasoner,
+            subgoal,
+            dynamics,
+        })
+    }
+
+    /// Records what the model was taught (saved in `config.json`).
+    pub fn set_task(&mut self, task: Task) {
+        self.networks.task = task;
+    }
+
+    /// The model directory's files, in the order of
+    /// [`FILES`](packwright_nets::FILES).
+    pub fn to_files(&self) -> Result<Vec<(&'static str, Vec<u8>)>, SaveError> {
+        Ok(vec![
+            (FILES[0], self.networks.config_json()?),
+            (FILES[1], save(&self.reasoner, FILES[1])?),
+            (FILES[2], save(&self.subgoal, FILES[2])?),
+            (FILES[3], save(&self.dynamics, FILES[3])?),
+        ])
+    }
+
+    #[cfg(test)]
+    pub(crate) fn modules(&self) -> (&Reasoner, &SubGoalPlanner, &DynamicsPolicy) {
+        (&self.reasoner, &self.subgoal, &self.dynamics)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::{graph_inputs, matrix};
+    use crate::training::SEEDED_DEVICE;
+    use burn::prelude::*;
+    use packwright_nets::features::{subgoal_input, subgoal_width};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn close(a: &[f32], b: &[f32]) -> bool {
+        a.len() == b.len()
+            && a.iter()
+                .zip(b)
+                .all(|(x, y)| (x - y).abs() <= 1e-4 * (1.0 + x.abs().max(y.abs())))
+    }
+
+    fn values(t: Tensor<2>) -> Vec<f32> {
+        t.into_data().try_to_vec::<f32>().unwrap_or_default()
+    }
+
+    /// The plain run-time passes compute what burn's forward passes do,
+    /// on randomly initialised networks and random inputs of 1 to 20
+    /// products; and the files burn writes load into the same networks.
+    #[test]
+    fn plain_passes_match_burn() {
+        // Random weights come from the process-wide device stream: not
+        // while a seeded training test runs.
+        let _turn = SEEDED_DEVICE
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let device = Device::flex();
+        let c = ModelConfig::new(6);
+        let trained = Trained::new(
+            c.clone(),
+            TrainConfig::default(),
+            Reasoner::new(&c, &device),
+            SubGoalPlanner::new(&c, &device),
+            DynamicsPolicy::new(&c, &device),
+        )
+        .expect("weights readable");
+        let files = trained.to_files().expect("saves");
+        let loaded = Networks::from_files(&files[0].1, &files[1].1, &files[2].1, &files[3].1)
+            .expect("loads without burn");
+        let (reasoner, subgoal, dynamics) = trained.modules();
+        let plain = trained.networks.weights();
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for m in 1..=20 {
+            let nodes: Vec<[f32; 4]> = (0..m)
+                .map(|_| {
+                    [
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(-1.0..1.0),
+                        rng.random_range(0.0..0.5),
+                        f32::from(u8::from(rng.random_bool(0.5))),
+                    ]
+                })
+                .collect();
+            let (n, a, mask, score_mask) =
+                graph_inputs(std::iter::once(nodes.as_slice())).tensors(&device);
+            let scores = reasoner.scores(n, a, mask, score_mask);
+            let plain_scores = plain.reasoner.scores(&nodes);
+            assert!(
+                close(&values(scores.clone()), &plain_scores),
+                "scores, m = {m}"
+            );
+            assert_eq!(plain_scores, loaded.weights().reasoner.scores(&nodes));
+            let goal = [rng.random_range(-1.0..1.0), 0.5, 0.1];
+            let labels = reasoner.label(scores, matrix(1, 3, goal.to_vec(), &device));
+            assert!(
+                close(&values(labels), &plain.reasoner.labels(&plain_scores, goal)),
+                "labels, m = {m}"
+            );
+
+            let mut x = Vec::new();
+            let feature = [0.5, -0.2, 0.1];
+            let tool = [rng.random_range(-1.0..1.0), 0.3, 0.6];
+            subgoal_input(&mut x, feature, tool, m % 6, m % 3, 6);
+            let burn = subgoal.forward(matrix(1, subgoal_width(6), x.clone(), &device), None);
+            assert!(close(&values(burn.mean), &plain.subgoal.mean(&x)));
+            assert_eq!(plain.subgoal.mean(&x), loaded.weights().subgoal.mean(&x));
+
+            let delta = [rng.random_range(-0.5..0.5), 0.1, -0.2];
+            let joints = [rng.random_range(-3.0..3.0), -1.0, 1.5];
+            let input: Vec<f32> = delta.into_iter().chain(joints).collect();
+            let burn = dynamics.forward(matrix(1, 6, input, &device));
+            assert!(close(&values(burn), &plain.dynamics.action(delta, joints)));
+            assert_eq!(
+                plain.dynamics.action(delta, joints),
+                loaded.weights().dynamics.action(delta, joints)
+            );
+        }
+    }
+}
