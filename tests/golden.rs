@@ -274,12 +274,17 @@ fn fmt_check_then_fmt_then_clean() {
     let _ = fs::remove_dir_all(&dir);
 }
 
-/// The canonical examples in `../shared/examples/` (present beside the
-/// repository in CI) must be accepted verbatim.
+/// The canonical examples in `../shared/examples/` (beside the
+/// repository in CI, where their absence is a failure) must be accepted
+/// verbatim.
 #[test]
 fn shared_examples_compile_when_present() {
     let shared = root().join("../shared/examples");
     if !shared.is_dir() {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "CI=true but ../shared/examples is missing"
+        );
         eprintln!("../shared/examples not found; skipped");
         return;
     }

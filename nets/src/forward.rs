@@ -1,18 +1,18 @@
 //! The trained networks' forward passes on plain `f32` slices, for run
 //! time.
 //!
-//! burn/flex costs a few microseconds per tensor operation at batch 1 and a
-//! reasoner call is some sixty operations (≈ 200 µs measured); the same
-//! arithmetic here takes about ten. The weights are read from a model's
+//! burn/flex costs microseconds per tensor operation at batch 1, and a
+//! reasoner call is some sixty operations; these loops do the same
+//! arithmetic without that overhead (ARCHITECTURE.md, "Decisions"; the
+//! figures are in the README). The weights are read from a model's
 //! safetensors files (`networks.rs`) or copied from the burn modules after
 //! training (`packwright-train`), and a test there checks these passes
 //! against burn's on random inputs.
 //!
 //! A dense layer is a loop over its inputs adding a weight column times
 //! the input (contiguous, so it vectorises), skipping inputs that are 0:
-//! after a ReLU about half are. With `nalgebra`'s generic `gemv` a
-//! 5-product reasoner decision took 16 µs (`cargo bench -p packwright-nets
-//! --bench learning` measures these passes).
+//! after a ReLU about half are (`cargo bench -p packwright-nets --bench
+//! learning` measures these passes).
 
 use crate::features::NODE_FEATURES;
 
@@ -168,7 +168,7 @@ impl ReasonerWeights {
     ///
     /// Works in one cache-aligned scratch on the stack: inside a run the
     /// allocator is as cold as the weights, and a fresh heap block can
-    /// cost page faults (measured: 16–20 µs against 19–23 µs per decision).
+    /// cost page faults.
     pub fn scores(&self, nodes: &[[f32; 4]]) -> Vec<f32> {
         let m = nodes.len();
         let width = self

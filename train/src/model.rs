@@ -59,13 +59,11 @@ impl Sage {
 /// of the embeddings and the max of the raw node inputs (a max tells a
 /// held product apart however many nodes there are; a mean changes with
 /// every missing product, and picked the box with nothing held in 10% of
-/// missing-stock scenarios). A node's
-/// score reads the node's own inputs: when it also read its embedding, the
-/// network learnt from CASE 1 demonstrations the shortcut "my chain
-/// neighbour was just packed, so I am next", right in CASE 1 and wrong
-/// when a worker packed products out of order (reasoner SR 0.21 to 0.66
-/// on CASE 2 and missing-stock suites, against 1.00 without it; measured,
-/// see ARCHITECTURE.md).
+/// missing-stock scenarios). A node's score reads the node's own inputs:
+/// when it also read its embedding, the network learnt from CASE 1
+/// demonstrations the shortcut "my chain neighbour was just packed, so I
+/// am next", right in CASE 1 and wrong when a worker packed products out
+/// of order (ARCHITECTURE.md, "Decisions", has the measurements).
 #[derive(Module, Debug)]
 pub struct Reasoner {
     layers: Vec<Sage>,

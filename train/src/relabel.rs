@@ -2,14 +2,14 @@
 //!
 //! The demonstrations show the policy only the states on the expert's own
 //! paths; a learnt policy drifts off them, and near a sub-goal it then
-//! meets deltas it never saw (measured: stalls 1–4 cm short within 30
-//! steps). [`ExpertCoach`] rolls the policy out with forward kinematics
-//! from every demonstrated sub-goal start towards the demonstrated
-//! sub-goal through the learned runtime loop's own stepping
-//! (`packwright_motion::execute::policy_steps`: clipped to 5 degrees, the wrist keeping the
-//! cup down), and labels each state it
-//! visits with the expert's action there: the straight joint-space step
-//! towards the joints the expert reached the sub-goal with.
+//! meets deltas it never saw and stalls short of it (ARCHITECTURE.md,
+//! "Decisions"). [`ExpertCoach`] rolls the policy out with forward
+//! kinematics from every demonstrated sub-goal start towards the
+//! demonstrated sub-goal through the learned loop's own stepping
+//! (`packwright_motion::execute::policy_steps`: clipped to 5 degrees, the
+//! wrist keeping the cup down), and labels each state it visits with the
+//! expert's action there: the straight joint-space step towards the joints
+//! the expert reached the sub-goal with.
 
 use crate::dagger::{Coach, Relabelled};
 use nalgebra::Isometry3;

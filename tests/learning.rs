@@ -1,0 +1,151 @@
+//! `packwright train` and `packwright eval` end to end, on small inputs:
+//! a short training of the pine-gifts demonstrations whose model loads and
+//! drives `execute`, and an evaluation of a few scenarios with the bundled
+//! model beside the baselines.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn packwright(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_packwright"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("packwright runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("packwright-learning-{name}-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).expect("scratch directory");
+    dir
+}
+
+fn text(out: &Output) -> String {
+    format!(
+        "stdout:\n{}\nstderr:\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+#[test]
+fn train_writes_a_model_that_execute_loads() {
+    let dir = scratch("train");
+    let compiled = dir.join("pine").display().to_string();
+    let model = dir.join("model").display().to_string();
+    let out = packwright(&[
+        "compile",
+        "orders/customers/pine_gifts.pack",
+        "-o",
+        &compiled,
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+
+    // An unknown demonstration block is trouble: exit 2, nothing written.
+    let out = packwright(&[
+        "train", &compiled, "-o", &model, "--demos", "nope", "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no demonstration block `nope`"));
+    assert!(!Path::new(&model).exists());
+
+    let out = packwright(&[
+        "train",
+        &compiled,
+        "-o",
+        &model,
+        "--epochs",
+        "5",
+        "--dagger-rounds",
+        "1",
+        "--quiet",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(report["schema"], "packwright.metrics/1");
+    assert_eq!(report["cell"], "line2");
+    assert_eq!(report["demonstrations"], 2);
+    assert_eq!(report["replayed"], 2);
+    // pine_trio's demo handles 3 products, pine_duo's 2: 5 × 2 stages × 3
+    // sub-goals, 20 actions each.
+    assert_eq!(report["samples"]["subgoals"], 30);
+    assert_eq!(report["samples"]["actions"], 600);
+    assert_eq!(report["dagger"].as_array().map(Vec::len), Some(2));
+    for file in [
+        "config.json",
+        "reasoner.safetensors",
+        "subgoal.safetensors",
+        "dynamics.safetensors",
+        "metrics.json",
+    ] {
+        assert!(Path::new(&model).join(file).is_file(), "{file} written");
+    }
+    let config: serde_json::Value =
+        serde_json::from_slice(&fs::read(Path::new(&model).join("config.json")).expect("config"))
+            .expect("JSON");
+    assert_eq!(config["task"]["cell"], "line2");
+    assert_eq!(config["training"]["epochs"], 5);
+
+    // The model loads and packs (or fails, typed) with the learned planner.
+    let out = packwright(&[
+        "execute",
+        "orders/customers/pine_gifts.pack",
+        "--order",
+        "pine_duo",
+        "--model",
+        &model,
+        "--json",
+    ]);
+    assert!(matches!(out.status.code(), Some(0 | 1)), "{}", text(&out));
+    let run: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(run["planner"], "learned");
+    assert_eq!(run["task"], "pine_duo");
+    assert_eq!(run["products"].as_array().map(Vec::len), Some(2));
+    let _ = fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn eval_reports_every_planner_of_a_suite() {
+    let dir = scratch("eval");
+    let table = dir.join("eval.md").display().to_string();
+    let out = packwright(&[
+        "eval",
+        "orders/suites/measure.pack",
+        "--suite",
+        "m_case1_2of3",
+        "--limit",
+        "3",
+        "--baselines",
+        "--quiet",
+        "--json",
+        "--markdown",
+        &table,
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(report["schema"], "packwright.eval/1");
+    let rows = report["rows"].as_array().expect("rows");
+    let planners: Vec<&str> = rows.iter().filter_map(|r| r["planner"].as_str()).collect();
+    assert_eq!(planners, ["learned", "rrt", "expert"]);
+    for r in rows {
+        assert_eq!(r["suite"], "m_case1_2of3");
+        assert_eq!(r["scenarios"], 3);
+        // The bundled model and both baselines pack these scenarios.
+        assert_eq!(r["sr"]["rate"], 1.0, "{r}");
+        assert_eq!(r["decision_us"]["n"].as_u64().map(|n| n > 0), Some(true));
+    }
+    assert_eq!(rows[0]["reasoner_sr"]["rate"], 1.0);
+    assert!(rows[1]["reasoner_sr"].is_null());
+    let md = fs::read_to_string(&table).expect("markdown written");
+    assert_eq!(md.lines().count(), 2 + 3, "{md}");
+    assert!(md.contains("| m_case1_2of3 | learned | 3 | 1.000"), "{md}");
+    let _ = fs::remove_dir_all(&dir);
+}
