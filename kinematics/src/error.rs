@@ -1,10 +1,63 @@
-//! The robot-model crate's error.
+//! The robot-model crate's error: a robot description that cannot be used.
 
 use thiserror::Error;
 
-/// A robot description that cannot be used, and why (for people: the
-/// reasons are as many as URDF's ways to be wrong, and no caller tells
-/// them apart).
+/// Why a URDF description is refused.
 #[derive(Debug, Clone, PartialEq, Error)]
-#[error("robot description: {0}")]
-pub struct UrdfError(pub String);
+pub enum UrdfError {
+    /// Not URDF XML (urdf-rs's words).
+    #[error("robot description: invalid URDF: {reason}")]
+    Parse { reason: String },
+    #[error("robot description: two links have the same name")]
+    DuplicateLink,
+    #[error("robot description: joint `{joint}` names an unknown link `{link}`")]
+    UnknownLink { joint: String, link: String },
+    #[error(
+        "robot description: link `{link}` is the child of two joints (`{first}` and `{second}`): not a chain"
+    )]
+    TwoParents {
+        link: String,
+        first: String,
+        second: String,
+    },
+    #[error("robot description: the description has no links")]
+    NoLinks,
+    #[error("robot description: the joints form a loop: no root link")]
+    Loop,
+    #[error("robot description: several root links ({}): the description must be one chain", roots.join(", "))]
+    SeveralRoots { roots: Vec<String> },
+    #[error(
+        "robot description: the chain branches at link `{link}` (joints {}): only a single chain is supported",
+        joints.join(", ")
+    )]
+    Branches { link: String, joints: Vec<String> },
+    #[error(
+        "robot description: `{robot}` has more than 6 movable joints (`{joint}` is the 7th): packwright drives 6-axis arms"
+    )]
+    TooManyJoints { robot: String, joint: String },
+    #[error("robot description: joint `{joint}` has no valid axis")]
+    NoAxis { joint: String },
+    /// A prismatic, floating or planar joint.
+    #[error(
+        "robot description: joint `{joint}` is {kind}: only revolute, continuous and fixed joints are supported"
+    )]
+    JointKind { joint: String, kind: String },
+    #[error(
+        "robot description: `{robot}` has {found} movable joints along its chain; packwright needs exactly 6"
+    )]
+    JointCount { robot: String, found: usize },
+    #[error("robot description: {what} has a non-finite origin")]
+    Origin { what: String },
+    #[error(
+        "robot description: revolute joint `{joint}` needs a <limit> with finite lower < upper (found {lower} .. {upper})"
+    )]
+    PositionLimits {
+        joint: String,
+        lower: f64,
+        upper: f64,
+    },
+    #[error("robot description: joint `{joint}` needs a <limit> with a positive finite velocity")]
+    Velocity { joint: String },
+    #[error("robot description: {what} has a non-positive or non-finite size")]
+    Size { what: String },
+}

@@ -36,35 +36,34 @@ pub const DEFAULT_JERK: f64 = 10.0;
 /// How closely joint origins must match the DH encoding to count as UR.
 const UR_TOLERANCE: f64 = 1e-6;
 
-fn err(msg: impl Into<String>) -> UrdfError {
-    UrdfError(msg.into())
-}
-
 /// Reads a 6-axis arm from URDF text. See the module documentation for what
 /// is accepted.
 pub fn from_urdf(text: &str) -> Result<Arm, UrdfError> {
-    let robot = urdf_rs::read_from_string(text).map_err(|e| err(format!("invalid URDF: {e}")))?;
+    let robot = urdf_rs::read_from_string(text).map_err(|e| UrdfError::Parse {
+        reason: e.to_string(),
+    })?;
     let links: HashMap<&str, &urdf_rs::Link> =
         robot.links.iter().map(|l| (l.name.as_str(), l)).collect();
     if links.len() != robot.links.len() {
-        return Err(err("two links have the same name"));
+        return Err(UrdfError::DuplicateLink);
     }
     let mut children: HashMap<&str, Vec<&urdf_rs::Joint>> = HashMap::new();
     let mut has_parent: HashMap<&str, &str> = HashMap::new();
     for j in &robot.joints {
         for end in [&j.parent.link, &j.child.link] {
             if !links.contains_key(end.as_str()) {
-                return Err(err(format!(
-                    "joint `{}` names an unknown link `{end}`",
-                    j.name
-                )));
+                return Err(UrdfError::UnknownLink {
+                    joint: j.name.clone(),
+                    link: end.clone(),
+                });
             }
         }
         if let Some(other) = has_parent.insert(&j.child.link, &j.name) {
-            return Err(err(format!(
-                "link `{}` is the child of two joints (`{other}` and `{}`): not a chain",
-                j.child.link, j.name
-            )));
+            return Err(UrdfError::TwoParents {
+                link: j.child.link.clone(),
+                first: other.to_owned(),
+                second: j.name.clone(),
+            });
         }
         children.entry(&j.parent.link).or_default().push(j);
     }
@@ -76,13 +75,12 @@ pub fn from_urdf(text: &str) -> Result<Arm, UrdfError> {
         .collect();
     let root = match roots.as_slice() {
         [root] => *root,
-        [] if robot.links.is_empty() => return Err(err("the description has no links")),
-        [] => return Err(err("the joints form a loop: no root link")),
+        [] if robot.links.is_empty() => return Err(UrdfError::NoLinks),
+        [] => return Err(UrdfError::Loop),
         _ => {
-            return Err(err(format!(
-                "several root links ({}): the description must be one chain",
-                roots.join(", ")
-            )));
+            return Err(UrdfError::SeveralRoots {
+                roots: roots.iter().map(|r| (*r).to_owned()).collect(),
+            });
         }
     };
 
@@ -93,11 +91,10 @@ pub fn from_urdf(text: &str) -> Result<Arm, UrdfError> {
             [joint] => *joint,
             [] => break,
             many => {
-                let names: Vec<&str> = many.iter().map(|j| j.name.as_str()).collect();
-                return Err(err(format!(
-                    "the chain branches at link `{current}` (joints {}): only a single chain is supported",
-                    names.join(", ")
-                )));
+                return Err(UrdfError::Branches {
+                    link: current.to_owned(),
+                    joints: many.iter().map(|j| j.name.clone()).collect(),
+                });
             }
         };
         current = &joint.child.link;
@@ -162,16 +159,17 @@ impl Chain {
             }
             JointType::Revolute | JointType::Continuous => {
                 if self.origins.len() == DOF {
-                    return Err(err(format!(
-                        "`{robot}` has more than {DOF} movable joints (`{}` is the {}th): packwright drives 6-axis arms",
-                        joint.name,
-                        DOF + 1
-                    )));
+                    return Err(UrdfError::TooManyJoints {
+                        robot: robot.to_owned(),
+                        joint: joint.name.clone(),
+                    });
                 }
                 let axis = Vector3::from(joint.axis.xyz.0);
                 let axis = Unit::try_new(axis, 1e-9)
                     .filter(|a| a.iter().all(|v| v.is_finite()))
-                    .ok_or_else(|| err(format!("joint `{}` has no valid axis", joint.name)))?;
+                    .ok_or_else(|| UrdfError::NoAxis {
+                        joint: joint.name.clone(),
+                    })?;
                 self.limits.push(limits(joint)?);
                 self.origins.push(self.pending * origin);
                 self.axes.push(axis);
@@ -184,14 +182,14 @@ impl Chain {
                 self.links.push(link);
                 Ok(())
             }
-            JointType::Prismatic => Err(err(format!(
-                "joint `{}` is prismatic: only revolute, continuous and fixed joints are supported",
-                joint.name
-            ))),
-            ref other => Err(err(format!(
-                "joint `{}` is {other:?}: only revolute, continuous and fixed joints are supported",
-                joint.name
-            ))),
+            JointType::Prismatic => Err(UrdfError::JointKind {
+                joint: joint.name.clone(),
+                kind: "prismatic".into(),
+            }),
+            ref other => Err(UrdfError::JointKind {
+                joint: joint.name.clone(),
+                kind: format!("{other:?}"),
+            }),
         }
     }
 
@@ -202,9 +200,10 @@ impl Chain {
             <[_; DOF]>::try_from(self.axes),
             <[_; DOF]>::try_from(self.limits),
         ) else {
-            return Err(err(format!(
-                "`{robot}` has {found} movable joints along its chain; packwright needs exactly {DOF}"
-            )));
+            return Err(UrdfError::JointCount {
+                robot: robot.to_owned(),
+                found,
+            });
         };
         let flange = self.flange.map_or(self.pending, |(_, f)| f);
         let ur = detect_ur(&origins, &axes);
@@ -223,7 +222,9 @@ impl Chain {
 /// A URDF origin: translation, then the rpy rotation (`Rz(y) Ry(p) Rx(r)`).
 fn pose(p: &Pose, what: &str) -> Result<Isometry3<f64>, UrdfError> {
     if p.xyz.iter().chain(p.rpy.iter()).any(|v| !v.is_finite()) {
-        return Err(err(format!("{what} has a non-finite origin")));
+        return Err(UrdfError::Origin {
+            what: what.to_owned(),
+        });
     }
     let [r, pi, y] = p.rpy.0;
     Ok(Isometry3::from_parts(
@@ -238,17 +239,18 @@ fn limits(joint: &urdf_rs::Joint) -> Result<Limits, UrdfError> {
     let (lower, upper) = if joint.joint_type == JointType::Continuous {
         (-TAU, TAU)
     } else if !(l.lower.is_finite() && l.upper.is_finite() && l.lower < l.upper) {
-        return Err(err(format!(
-            "revolute joint `{name}` needs a <limit> with finite lower < upper (found {} .. {})",
-            l.lower, l.upper
-        )));
+        return Err(UrdfError::PositionLimits {
+            joint: name.clone(),
+            lower: l.lower,
+            upper: l.upper,
+        });
     } else {
         (l.lower, l.upper)
     };
     if !(l.velocity.is_finite() && l.velocity > 0.0) {
-        return Err(err(format!(
-            "joint `{name}` needs a <limit> with a positive finite velocity"
-        )));
+        return Err(UrdfError::Velocity {
+            joint: name.clone(),
+        });
     }
     let positive = |v: f64, default: f64| if v.is_finite() && v > 0.0 { v } else { default };
     Ok(Limits {
@@ -271,7 +273,7 @@ fn add_shapes(
         let what = format!("a collision shape of link `{}`", link.name);
         let place = at * pose(&c.origin, &what)?;
         let positive = |v: f64| v.is_finite() && v > 0.0;
-        let bad = || err(format!("{what} has a non-positive or non-finite size"));
+        let bad = || UrdfError::Size { what: what.clone() };
         let segment = |length: f64, radius: f64| -> Result<Shape, UrdfError> {
             if !positive(length) || !positive(radius) {
                 return Err(bad());

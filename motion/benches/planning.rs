@@ -7,7 +7,7 @@ mod common;
 use common::bench_cell;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nalgebra::{Isometry3, Point3};
+use nalgebra::Point3;
 use packwright_kinematics::Arm;
 use packwright_motion::collision::{Checker, ProductBody};
 use packwright_motion::execute::{Load, reach};
@@ -38,17 +38,7 @@ fn bench(c: &mut Criterion) {
     checker.set_products(&cubes);
     let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
     let at = |x: f64, y: f64, z: f64| {
-        reach(
-            &arm,
-            &checker,
-            &Isometry3::identity(),
-            Point3::new(x, y, z),
-            0.0,
-            0.1,
-            &ready,
-            Load::FREE,
-        )
-        .expect("reachable")
+        reach(&checker, Point3::new(x, y, z), 0.0, &ready, Load::FREE).expect("reachable")
     };
     let pick = at(0.62, -0.2, 0.2);
     let place = at(0.0, 0.6, 0.2);

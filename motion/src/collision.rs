@@ -88,6 +88,8 @@ pub struct Checker {
     /// Part pairs never checked against each other.
     allowed: Vec<(usize, usize)>,
     held_padding: f64,
+    /// Length of the cup below the flange.
+    suction: f64,
 }
 
 impl Checker {
@@ -120,7 +122,23 @@ impl Checker {
             products: Vec::new(),
             allowed: body::touching_pairs(arm, cell.suction),
             held_padding,
+            suction: cell.suction,
         }
+    }
+
+    /// The arm checked.
+    pub fn arm(&self) -> &Arm {
+        &self.arm
+    }
+
+    /// The robot base's pose in the world.
+    pub fn base(&self) -> &Isometry3<f64> {
+        &self.base
+    }
+
+    /// The length of the cup below the flange.
+    pub fn suction(&self) -> f64 {
+        self.suction
     }
 
     /// Replaces the free-standing products.

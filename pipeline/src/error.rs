@@ -19,7 +19,7 @@ pub enum PipelineError {
         what: &'static str,
         name: String,
     },
-    #[error("robot description {path}: {source}")]
+    #[error("{path}: {source}")]
     Urdf { path: String, source: UrdfError },
     #[error("the arm cannot reach a start pose over the pending area of cell `{cell}`")]
     NoStartPose { cell: String },

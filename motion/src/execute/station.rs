@@ -127,16 +127,7 @@ impl<'a, W: World> Station<'a, W> {
     ) -> Result<Joints, Failure> {
         let solve = |z: f64| {
             let tip = Point3::new(goal.tip[0], goal.tip[1], z);
-            let q = reach(
-                self.arm,
-                &self.checker,
-                &self.base,
-                tip,
-                yaw,
-                self.task.cell.suction,
-                from,
-                load,
-            )?;
+            let q = reach(&self.checker, tip, yaw, from, load)?;
             let blocked = goal.suction == Suction::Off
                 && checked_samples(self.arm, &self.checker, *from, &[q], load).is_err();
             (!blocked).then_some(q)
@@ -332,19 +323,17 @@ pub fn checked_samples(
 
 /// Joints that put the cup tip at `tip` pointing down with `yaw`, free of
 /// collisions: among the inverse-kinematics branches (all eight for a UR
-/// arm), the one nearest `near` that the checker finds free.
-#[allow(clippy::too_many_arguments)]
+/// arm), the one nearest `near` that `checker` (its arm, base and cup)
+/// finds free.
 pub fn reach(
-    arm: &Arm,
     checker: &Checker,
-    base: &Isometry3<f64>,
     tip: Point3<f64>,
     yaw: f64,
-    suction: f64,
     near: &Joints,
     load: Load,
 ) -> Option<Joints> {
-    let flange = tool_down_pose(tip, yaw, suction);
+    let (arm, base) = (checker.arm(), checker.base());
+    let flange = tool_down_pose(tip, yaw, checker.suction());
     let mut candidates: Vec<Joints> = if arm.ur.is_some() {
         arm.ur_ik_branches(base, &flange, near)
             .into_iter()
@@ -365,17 +354,6 @@ pub fn reach(
 pub fn home(arm: &Arm, cell: &CellScene) -> Option<Joints> {
     let (lo, hi) = cell.pending;
     let tip = Point3::new((lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, HOME_HEIGHT);
-    let base = Isometry3::translation(cell.base[0], cell.base[1], cell.base[2]);
     let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
-    let checker = Checker::new(arm, cell);
-    reach(
-        arm,
-        &checker,
-        &base,
-        tip,
-        0.0,
-        cell.suction,
-        &ready,
-        Load::FREE,
-    )
+    reach(&Checker::new(arm, cell), tip, 0.0, &ready, Load::FREE)
 }
