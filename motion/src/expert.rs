@@ -8,6 +8,7 @@
 //! clear of the box's rim; down into the slot, the product's bottom
 //! [`RELEASE_GAP`] above the box floor (suction off).
 
+use packwright_interface::outcome::Stage;
 use packwright_interface::scene::CellScene;
 
 /// Height of the hover point above a product's top face.
@@ -27,6 +28,16 @@ pub enum Suction {
     Off,
 }
 
+/// The suction schedule of a stage: what happens at each of its three
+/// sub-goals (picking: on at the top face; placing: off at the release).
+/// The expert and the learned loop both follow it.
+pub fn schedule(stage: Stage) -> [Suction; 3] {
+    match stage {
+        Stage::Picking => [Suction::Keep, Suction::On, Suction::Keep],
+        Stage::Placing => [Suction::Keep, Suction::Keep, Suction::Off],
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SubGoal {
     /// Tool-tip position.
@@ -38,18 +49,19 @@ pub struct SubGoal {
 /// `height`, carried `lift` above where it stood.
 pub fn picking(centre: [f64; 3], height: f64, lift: f64) -> [SubGoal; 3] {
     let top = centre[2] + height / 2.0;
+    let [s0, s1, s2] = schedule(Stage::Picking);
     [
         SubGoal {
             tip: [centre[0], centre[1], top + HOVER],
-            suction: Suction::Keep,
+            suction: s0,
         },
         SubGoal {
             tip: [centre[0], centre[1], top],
-            suction: Suction::On,
+            suction: s1,
         },
         SubGoal {
             tip: [centre[0], centre[1], top + lift],
-            suction: Suction::Keep,
+            suction: s2,
         },
     ]
 }
@@ -82,6 +94,7 @@ pub fn placing(
     }
     let angle = a0 + turn / 2.0;
     let radius = ((r0 + r1) / 2.0).max(MIN_APPROACH_RADIUS);
+    let [s0, s1, s2] = schedule(Stage::Placing);
     [
         SubGoal {
             tip: [
@@ -89,15 +102,15 @@ pub fn placing(
                 base[1] + radius * angle.sin(),
                 carry,
             ],
-            suction: Suction::Keep,
+            suction: s0,
         },
         SubGoal {
             tip: [slot[0], slot[1], above],
-            suction: Suction::Keep,
+            suction: s1,
         },
         SubGoal {
             tip: [slot[0], slot[1], height + RELEASE_GAP],
-            suction: Suction::Off,
+            suction: s2,
         },
     ]
 }

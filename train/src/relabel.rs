@@ -13,10 +13,10 @@
 
 use crate::dagger::{Coach, Relabelled};
 use nalgebra::Isometry3;
-use packwright_interface::outcome::Stage;
 use packwright_interface::record::{self, MotionLog};
 use packwright_kinematics::{Arm, Joints};
 use packwright_motion::execute::{REACHED, REACHED_VIA, policy_steps};
+use packwright_motion::expert::{Suction, schedule};
 use packwright_nets::features::ActionExample;
 use rayon::prelude::*;
 
@@ -48,12 +48,11 @@ impl<'a> ExpertCoach<'a> {
             .iter()
             .flat_map(|log| log.subgoals.iter())
             .map(|s| {
-                // The suction switches at the pick's contact (stage 0,
-                // sub-goal 2) and the release (stage 1, sub-goal 3).
-                let switch = matches!(
-                    (s.stage, s.index),
-                    (Stage::Picking, 1) | (Stage::Placing, 2)
-                );
+                // The suction switches at the pick's contact and the
+                // release: those are reached within 2 mm.
+                let switch = schedule(s.stage)
+                    .get(usize::from(s.index))
+                    .is_some_and(|&k| k != Suction::Keep);
                 Motion {
                     start: s.start,
                     goal: s.goal,
@@ -125,6 +124,7 @@ mod tests {
     use super::*;
     use crate::train;
     use nalgebra::Point3;
+    use packwright_interface::outcome::Stage;
     use packwright_interface::record::SubGoalSample;
     use packwright_nets::TrainConfig;
     use packwright_nets::features::{GraphExample, SubGoalExample, TrainingSet};

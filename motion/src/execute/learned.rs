@@ -12,7 +12,7 @@ use super::reasoner::{f32s, goal_input, graph, in_slot};
 use super::station::{Clock, Connect, Load, RAISE_STEP, SUCCESS_RADIUS, Station, Unchecked};
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
-use crate::expert::{SubGoal, Suction};
+use crate::expert::{SubGoal, Suction, schedule};
 use nalgebra::Isometry3;
 use packwright_interface::outcome::{
     Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, Violation,
@@ -30,14 +30,6 @@ pub const REACHED: f64 = 0.002;
 /// A via point (hover, lift, approach, above the slot) is reached when the
 /// cup tip is this close (m).
 pub const REACHED_VIA: f64 = 0.01;
-
-/// The suction switch at each of a stage's sub-goals.
-fn switches(stage: Stage) -> [Suction; 3] {
-    match stage {
-        Stage::Picking => [Suction::Keep, Suction::On, Suction::Keep],
-        Stage::Placing => [Suction::Keep, Suction::Keep, Suction::Off],
-    }
-}
 
 /// `q` moved by `step` (base, shoulder, elbow), the wrist turned so that the
 /// cup keeps pointing down with the same yaw (UR-type wrists); `None` when
@@ -192,7 +184,7 @@ impl<W: World> Learned<'_, W> {
     fn stage(&mut self, plan: &StagePlan) -> Result<[[f64; 3]; 3], Failure> {
         let mut fallen = false;
         let mut goals = [[0.0; 3]; 3];
-        for (k, switch) in switches(plan.stage).into_iter().enumerate() {
+        for (k, switch) in schedule(plan.stage).into_iter().enumerate() {
             let start = self.station.world.observe().joints;
             let started = Instant::now();
             let tool = f32s(self.station.tip(&start));
