@@ -1,22 +1,85 @@
-//! File-system edge: the compiler's [`Loader`] on real files, and atomic
-//! writes (write a temporary sibling, sync it, rename it into place).
+//! File-system edge: the compiler's [`Loader`] on real files (bounded
+//! reads), and atomic writes (write a temporary sibling, sync it, rename it
+//! into place; siblings left by killed runs are removed by the next one).
 
 use anyhow::{Context, bail};
 use packwright_compiler::{Artifact, Loader};
 use std::fs;
-use std::io::{ErrorKind, Write};
+use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
 
-/// Reads source files from disk.
+/// The largest `.pack` source file read, bytes (16 MiB): a bigger one (or
+/// an endless one such as `/dev/zero`) is refused after reading this much.
+pub const MAX_SOURCE_BYTES: u64 = 16 << 20;
+
+/// Reads a source file: at most [`MAX_SOURCE_BYTES`], UTF-8 text. The
+/// error says why for people ("no such file", "not UTF-8 text", "larger
+/// than 16 MiB").
+pub fn read_source(path: &Path) -> Result<String, String> {
+    let describe = |e: std::io::Error| match e.kind() {
+        ErrorKind::NotFound => "no such file".to_owned(),
+        ErrorKind::InvalidData => "not UTF-8 text".to_owned(),
+        _ => e.to_string(),
+    };
+    let file = fs::File::open(path).map_err(describe)?;
+    let mut bytes = Vec::new();
+    file.take(MAX_SOURCE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(describe)?;
+    if bytes.len() as u64 > MAX_SOURCE_BYTES {
+        return Err(format!(
+            "larger than {} MiB, the limit for a .pack file",
+            MAX_SOURCE_BYTES >> 20
+        ));
+    }
+    String::from_utf8(bytes).map_err(|_| "not UTF-8 text".to_owned())
+}
+
+/// Reads source files from disk (see [`read_source`]).
 pub struct FsLoader;
 
 impl Loader for FsLoader {
     fn read(&self, path: &Path) -> Result<String, String> {
-        fs::read_to_string(path).map_err(|e| match e.kind() {
-            ErrorKind::NotFound => "no such file".to_owned(),
-            ErrorKind::InvalidData => "not UTF-8 text".to_owned(),
-            _ => e.to_string(),
-        })
+        read_source(path)
+    }
+}
+
+/// Removes temporary siblings of `path` (`.NAME.tmp-PID`, `.NAME.old-PID`)
+/// left by runs that were killed: those whose process is gone. Where
+/// processes cannot be looked up (no `/proc`), nothing is removed.
+fn remove_stale_siblings(path: &Path) {
+    let (Some(name), Some(parent)) = (path.file_name(), path.parent()) else {
+        return;
+    };
+    let parent = if parent.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        parent
+    };
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let name = name.to_string_lossy();
+    let Ok(entries) = fs::read_dir(parent) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let file = entry.file_name().to_string_lossy().into_owned();
+        let pid = ["tmp", "old"].iter().find_map(|tag| {
+            file.strip_prefix(&format!(".{name}.{tag}-"))
+                .and_then(|p| p.parse::<u32>().ok())
+        });
+        if let Some(pid) = pid
+            && pid != std::process::id()
+            && !Path::new(&format!("/proc/{pid}")).exists()
+        {
+            let stale = entry.path();
+            let _ = if stale.is_dir() {
+                fs::remove_dir_all(&stale)
+            } else {
+                fs::remove_file(&stale)
+            };
+        }
     }
 }
 
@@ -44,6 +107,7 @@ fn write_synced(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 
 /// Replaces `path` with `bytes` atomically.
 pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    remove_stale_siblings(path);
     let tmp = sibling(path, "tmp");
     write_synced(&tmp, bytes)?;
     fs::rename(&tmp, path)
@@ -85,6 +149,7 @@ pub fn write_dir_atomically(
         fs::create_dir_all(parent)
             .with_context(|| format!("cannot create {}", parent.display()))?;
     }
+    remove_stale_siblings(dir);
     let tmp = sibling(dir, "tmp");
     let _ = fs::remove_dir_all(&tmp);
     fs::create_dir(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;

@@ -2,15 +2,14 @@
 
 use crate::Exit;
 use crate::cli::FmtArgs;
-use crate::fsio::write_file_atomically;
-use anyhow::Context;
+use crate::fsio::{read_source, write_file_atomically};
 use packwright_compiler::{Error, Loc, SourceMap, diagnostic};
 
 pub fn run(args: &FmtArgs) -> anyhow::Result<Exit> {
     let mut exit = Exit::Success;
     for path in &args.files {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
+        let text = read_source(path)
+            .map_err(|why| anyhow::anyhow!("cannot read {}: {why}", path.display()))?;
         let formatted = match packwright_grammar::format(&text) {
             Ok(f) => f,
             Err(errors) => {
