@@ -94,6 +94,8 @@ pub enum Failure {
     Unreachable { subgoal: usize, tip: [f64; 3] },
     /// RRT-Connect found no path to the sub-goal.
     NoPath { subgoal: usize },
+    /// The sub-goal planner gave a sub-goal that is not a finite point.
+    NonFiniteSubGoal { subgoal: usize },
     /// The checked motion to the sub-goal would collide.
     WouldCollide { subgoal: usize, hit: Hit },
     /// The smoother found no trajectory (its reason, for people).
@@ -128,6 +130,12 @@ impl fmt::Display for Failure {
             ),
             Failure::NoPath { subgoal } => {
                 write!(f, "RRT-Connect found no path to sub-goal {subgoal}")
+            }
+            Failure::NonFiniteSubGoal { subgoal } => {
+                write!(
+                    f,
+                    "sub-goal {subgoal} is not a finite point (the model's output)"
+                )
             }
             Failure::WouldCollide { subgoal, hit } => {
                 write!(f, "the motion to sub-goal {subgoal} would collide: {hit}")

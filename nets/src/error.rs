@@ -28,6 +28,10 @@ pub enum ModelError {
     },
     #[error("{file}: tensor `{tensor}` holds a value that is not finite (NaN or infinite)")]
     NotFinite { file: &'static str, tensor: String },
+    /// The weights are finite but the networks' answers on a probe input
+    /// are not (weights so large that the arithmetic overflows).
+    #[error("the {network} gives non-finite outputs on a probe input: its weights are unusable")]
+    NonFiniteOutput { network: &'static str },
     #[error("cannot write config.json: {reason}")]
     Write { reason: String },
 }

@@ -185,7 +185,7 @@ impl Networks {
         let dynamics = DynamicsWeights {
             layers: denses(&d, "layers", &[(6, h), (h, h), (h, 3)])?,
         };
-        Ok(Networks {
+        let networks = Networks {
             config: saved.model,
             training: saved.training,
             task: saved.task,
@@ -194,7 +194,44 @@ impl Networks {
                 subgoal,
                 dynamics,
             },
-        })
+        };
+        networks.probe()?;
+        Ok(networks)
+    }
+
+    /// Checks that every network answers a typical input with finite
+    /// numbers: finite weights can still overflow (weights of 1e20).
+    fn probe(&self) -> Result<(), ModelError> {
+        let nodes = [
+            [0.5, -0.2, 0.025, 1.0],
+            [0.62, -0.2, 0.025, 0.0],
+            [0.0, 0.6, 0.2, 1.0],
+        ];
+        let r = &self.weights.reasoner;
+        let scores = r.scores(&nodes);
+        let labels = r.labels(&scores, [0.0, 0.6, 0.025]);
+        if scores.iter().chain(&labels).any(|v| !v.is_finite()) {
+            return Err(ModelError::NonFiniteOutput {
+                network: "reasoner",
+            });
+        }
+        for label in 0..self.config.labels {
+            for index in 0..3 {
+                let g = self.subgoal([0.5, -0.2, 0.025], [0.5, -0.2, 0.35], label, index);
+                if g.iter().any(|v| !v.is_finite()) {
+                    return Err(ModelError::NonFiniteOutput {
+                        network: "sub-goal planner",
+                    });
+                }
+            }
+        }
+        let a = self.action([0.05, -0.02, 0.1], [0.0, -1.5, 1.5]);
+        if a.iter().any(|v| !v.is_finite()) {
+            return Err(ModelError::NonFiniteOutput {
+                network: "dynamics policy",
+            });
+        }
+        Ok(())
     }
 
     /// The reasoner: which node to pick (or the box), then the label given
@@ -256,5 +293,87 @@ impl Policy for Networks {
 
     fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
         Networks::action(self, delta, joints)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use safetensors::tensor::TensorView;
+
+    const CONFIG: &[u8] = include_bytes!("../../models/default/config.json");
+    const REASONER: &[u8] = include_bytes!("../../models/default/reasoner.safetensors");
+    const SUBGOAL: &[u8] = include_bytes!("../../models/default/subgoal.safetensors");
+    const DYNAMICS: &[u8] = include_bytes!("../../models/default/dynamics.safetensors");
+
+    /// `bytes` with every value of every tensor passed through `f`.
+    fn mapped(bytes: &[u8], f: impl Fn(f32) -> f32) -> Vec<u8> {
+        let st = SafeTensors::deserialize(bytes).expect("safetensors");
+        let tensors: Vec<(String, Vec<usize>, Vec<u8>)> = st
+            .tensors()
+            .into_iter()
+            .map(|(name, t)| {
+                let data = t
+                    .data()
+                    .chunks_exact(4)
+                    .flat_map(|c| f(f32::from_le_bytes([c[0], c[1], c[2], c[3]])).to_le_bytes())
+                    .collect();
+                (name, t.shape().to_vec(), data)
+            })
+            .collect();
+        let views: Vec<(String, TensorView)> = tensors
+            .iter()
+            .map(|(n, shape, data)| {
+                (
+                    n.clone(),
+                    TensorView::new(Dtype::F32, shape.clone(), data).expect("view"),
+                )
+            })
+            .collect();
+        safetensors::serialize(views, None).expect("serialised")
+    }
+
+    #[test]
+    fn the_bundled_model_loads() {
+        let nets = Networks::from_files(CONFIG, REASONER, SUBGOAL, DYNAMICS).expect("loads");
+        assert_eq!(nets.task.cell, "line2");
+    }
+
+    /// NaN, infinite and overflowing weights are refused at load, naming
+    /// the file or the network.
+    #[test]
+    fn unusable_weights_are_refused() {
+        let nan = mapped(SUBGOAL, |_| f32::NAN);
+        assert!(matches!(
+            Networks::from_files(CONFIG, REASONER, &nan, DYNAMICS),
+            Err(ModelError::NotFinite {
+                file: "subgoal.safetensors",
+                ..
+            })
+        ));
+        let inf = mapped(DYNAMICS, |v| v * f32::INFINITY);
+        assert!(matches!(
+            Networks::from_files(CONFIG, REASONER, SUBGOAL, &inf),
+            Err(ModelError::NotFinite { .. })
+        ));
+        for scale in [1e20, 1e30] {
+            let huge = mapped(SUBGOAL, |v| v * scale);
+            assert_eq!(
+                Networks::from_files(CONFIG, REASONER, &huge, DYNAMICS).err(),
+                Some(ModelError::NonFiniteOutput {
+                    network: "sub-goal planner"
+                }),
+                "scale {scale}"
+            );
+        }
+        let short = &REASONER[..REASONER.len() / 2];
+        assert!(matches!(
+            Networks::from_files(CONFIG, short, SUBGOAL, DYNAMICS),
+            Err(ModelError::NotSafetensors { .. })
+        ));
+        assert!(matches!(
+            Networks::from_files(CONFIG, SUBGOAL, SUBGOAL, DYNAMICS),
+            Err(ModelError::Missing { .. })
+        ));
     }
 }

@@ -9,7 +9,9 @@
 //! [`Violation`]).
 
 use super::reasoner::{f32s, goal_input, graph, in_slot};
-use super::station::{Clock, Connect, Load, RAISE_STEP, SUCCESS_RADIUS, Station, Unchecked};
+use super::station::{
+    Clock, Connect, Load, MAX_RAISES, RAISE_STEP, SUCCESS_RADIUS, Station, Unchecked,
+};
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
 use crate::expert::{SubGoal, Suction, schedule};
@@ -198,6 +200,9 @@ impl<W: World> Learned<'_, W> {
             if let (Suction::On, Some(top)) = (switch, plan.contact) {
                 goal[2] = top;
             }
+            if goal.iter().any(|v| !v.is_finite()) {
+                return Err(Failure::NonFiniteSubGoal { subgoal: k + 1 });
+            }
             goals[k] = goal;
             let subgoal_us = started.elapsed().as_secs_f64() * 1e6;
             // A release the wrist cannot reach is raised, as the expert's
@@ -218,7 +223,10 @@ impl<W: World> Learned<'_, W> {
                 let mut rolled =
                     self.rollout(start, goal, tolerance, plan.load, &mut first_action_us);
                 let mut raised = 1;
-                while rolled.is_err() && goal[2] + RAISE_STEP * f64::from(raised) <= ceiling {
+                while rolled.is_err()
+                    && raised <= MAX_RAISES
+                    && goal[2] + RAISE_STEP * f64::from(raised) <= ceiling
+                {
                     let higher = [goal[0], goal[1], goal[2] + RAISE_STEP * f64::from(raised)];
                     if let Ok(samples) =
                         self.rollout(start, higher, tolerance, plan.load, &mut first_action_us)

@@ -22,6 +22,9 @@ use std::f64::consts::FRAC_PI_2;
 /// How much a release point is raised at a time when the wrist cannot
 /// reach it.
 pub(crate) const RAISE_STEP: f64 = 0.01;
+/// Most raises of a release point (1 m in all): the search is bounded
+/// whatever the sub-goal.
+pub(crate) const MAX_RAISES: u32 = 100;
 /// Cycles to wait after switching the suction on (0.1 s).
 const SUCTION_SETTLE: usize = 50;
 /// Cycles to let a released product settle (0.5 s).
@@ -125,6 +128,9 @@ impl<'a, W: World> Station<'a, W> {
         load: Load,
         ceiling: f64,
     ) -> Result<Joints, Failure> {
+        if goal.tip.iter().any(|v| !v.is_finite()) {
+            return Err(Failure::NonFiniteSubGoal { subgoal: k });
+        }
         let solve = |z: f64| {
             let tip = Point3::new(goal.tip[0], goal.tip[1], z);
             let q = reach(&self.checker, tip, yaw, from, load)?;
@@ -136,7 +142,7 @@ impl<'a, W: World> Station<'a, W> {
             .or_else(|| {
                 (goal.suction == Suction::Off)
                     .then(|| {
-                        (1..)
+                        (1..=MAX_RAISES)
                             .map(|i| goal.tip[2] + RAISE_STEP * f64::from(i))
                             .take_while(|z| *z <= ceiling)
                             .find_map(solve)
