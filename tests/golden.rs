@@ -4,21 +4,11 @@
 //! snapshots (`tests/snapshots/`). Review changes with `cargo insta review`
 //! or by reading the `.snap.new` files.
 
+mod common;
+use common::{packwright, root, scratch};
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn packwright(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_packwright"))
-        .current_dir(root())
-        .args(args)
-        .output()
-        .expect("the packwright binary runs")
-}
+use std::process::Output;
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
@@ -50,20 +40,12 @@ fn pack_files(dir: &str) -> Vec<String> {
     names
 }
 
-/// A fresh scratch directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("packwright-golden-{}-{name}", std::process::id()));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
-
 fn snapshot_name(path: &str) -> String {
     path.trim_end_matches(".pack").replace(['/', '\\'], "__")
 }
 
 fn show_of(files: &[&str], scratch_name: &str) -> String {
-    let dir = scratch(scratch_name);
+    let dir = scratch("golden", scratch_name);
     let out = dir.join("out");
     let out_s = out.display().to_string();
     let mut args = vec!["compile"];
@@ -132,7 +114,7 @@ fn every_example_order_compiles_and_shows() {
 #[test]
 fn compiling_twice_gives_the_same_bytes() {
     let files = pack_files("orders");
-    let dir = scratch("determinism");
+    let dir = scratch("golden", "determinism");
     let mut outputs = Vec::new();
     for run in ["a", "b"] {
         let out = dir.join(run).display().to_string();
@@ -162,7 +144,7 @@ fn compiling_twice_gives_the_same_bytes() {
 
 #[test]
 fn compile_replaces_artifacts_but_never_other_directories() {
-    let dir = scratch("atomic");
+    let dir = scratch("golden", "atomic");
     let precious = dir.join("precious");
     fs::create_dir_all(&precious).expect("dir");
     fs::write(precious.join("notes.txt"), "keep me").expect("write");
@@ -246,7 +228,7 @@ fn exit_codes_and_json_lines() {
 
 #[test]
 fn fmt_check_then_fmt_then_clean() {
-    let dir = scratch("fmt");
+    let dir = scratch("golden", "fmt");
     let file = dir.join("messy.pack");
     fs::write(
         &file,
@@ -313,7 +295,7 @@ fn the_readme_example_compiles() {
         .nth(1)
         .and_then(|b| b.split("```").next())
         .expect("code block");
-    let dir = scratch("readme");
+    let dir = scratch("golden", "readme");
     let file = dir.join("readme.pack");
     fs::write(&file, body).expect("write");
     let out = packwright(&["check", &file.display().to_string()]);
@@ -417,7 +399,7 @@ fn text_of(out: &Output) -> String {
 /// samples per sub-goal, every action within ±5 degrees.
 #[test]
 fn demonstrate_writes_motion_demonstrations() {
-    let dir = scratch("demonstrate");
+    let dir = scratch("golden", "demonstrate");
     let compiled = dir.join("pine").display().to_string();
     let motion = dir.join("motion.safetensors").display().to_string();
     assert_eq!(

@@ -3,29 +3,11 @@
 //! drives `execute`, and an evaluation of a few scenarios with the bundled
 //! model beside the baselines.
 
+mod common;
+use common::{packwright, scratch};
 use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn packwright(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_packwright"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("packwright runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("packwright-learning-{name}-{}", std::process::id()));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).expect("scratch directory");
-    dir
-}
+use std::path::Path;
+use std::process::Output;
 
 fn text(out: &Output) -> String {
     format!(
@@ -37,7 +19,7 @@ fn text(out: &Output) -> String {
 
 #[test]
 fn train_writes_a_model_that_execute_loads() {
-    let dir = scratch("train");
+    let dir = scratch("learning", "train");
     let compiled = dir.join("pine").display().to_string();
     let model = dir.join("model").display().to_string();
     let out = packwright(&[
@@ -114,7 +96,7 @@ fn train_writes_a_model_that_execute_loads() {
 
 #[test]
 fn eval_reports_every_planner_of_a_suite() {
-    let dir = scratch("eval");
+    let dir = scratch("learning", "eval");
     let table = dir.join("eval.md").display().to_string();
     let out = packwright(&[
         "eval",

@@ -2,36 +2,15 @@
 //! refused quickly, and temporary siblings left by killed runs are cleaned
 //! up by the next run.
 
+mod common;
+use common::{packwright, scratch};
 use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 use std::time::{Duration, Instant};
-
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn packwright(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_packwright"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("packwright runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "packwright-reliability-{name}-{}",
-        std::process::id()
-    ));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).expect("scratch directory");
-    dir
-}
 
 #[test]
 fn oversized_and_endless_sources_are_refused_quickly() {
-    let dir = scratch("size");
+    let dir = scratch("reliability", "size");
     let big = dir.join("big.pack");
     // 17 MiB of comments: valid text, over the 16 MiB limit.
     let line = format!("# {}\n", "x".repeat(1021));
@@ -73,7 +52,7 @@ fn a_killed_runs_temporary_directories_are_removed_by_the_next_run() {
     if !Path::new("/proc/self").exists() {
         return;
     }
-    let dir = scratch("stale");
+    let dir = scratch("reliability", "stale");
     let out = dir.join("out");
     // A process id above Linux's largest (4,194,304) is never alive; this
     // test's own process is.
