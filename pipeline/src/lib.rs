@@ -10,6 +10,7 @@ pub mod episode;
 pub mod error;
 pub mod evaluate;
 pub mod models;
+pub mod motion_file;
 pub mod replay;
 pub mod stats;
 pub mod teach;
