@@ -16,9 +16,7 @@ use nalgebra::{Isometry3, Vector3};
 use packwright_interface::outcome::Hit;
 use packwright_interface::scene::CellScene;
 use packwright_interface::world::Body;
-use packwright_kinematics::body::{
-    self, ArmPart, CUP, HELD_PADDING, Owner, PADDING, intersects, pose,
-};
+use packwright_kinematics::body::{self, ArmPart, CUP, HELD_PADDING, PADDING, intersects, pose};
 use packwright_kinematics::{Arm, DOF, Joints};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Vector};
@@ -107,11 +105,7 @@ impl Checker {
         let names = (0..=CUP).map(|i| body::part_body(arm, i)).collect();
         let statics = body::fixtures(cell)
             .iter()
-            .map(|f| {
-                let mut o = Obstacle::new(f.body(cell), f.centre, f.half, 0.0);
-                o.is_table = f.owner == Owner::Table;
-                o
-            })
+            .map(|f| Obstacle::new(f.body(cell), f.centre, f.half, 0.0))
             .collect();
         Checker {
             arm: arm.clone(),

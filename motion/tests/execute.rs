@@ -85,6 +85,11 @@ fn run(assign: &[(&str, &str)], packed: &[&str], missing: &[&str], planner: Plan
     execute::run(&mut sim, &arm, &task, &planner)
 }
 
+/// The learned loop with `policy`, RRT-Connect seeded with 3.
+fn run_learned(sim: &mut Simulator, arm: &Arm, task: &OrderTask, policy: &dyn Policy) -> Report {
+    execute::run(sim, arm, task, &Planner::Learned { policy, seed: 3 })
+}
+
 fn assert_packed(report: &Report) {
     for p in &report.products {
         assert!(
@@ -219,15 +224,7 @@ fn the_learned_loop_falls_back_to_rrt_connect_and_says_why() {
         task: task.clone(),
         wrong_pick: None,
     };
-    let report = execute::run(
-        &mut sim,
-        &arm,
-        &task,
-        &Planner::Learned {
-            policy: &policy,
-            seed: 3,
-        },
-    );
+    let report = run_learned(&mut sim, &arm, &task, &policy);
     assert_packed(&report);
     assert!(report.violations.is_empty(), "{:?}", report.violations);
     // Two stages per product, each falling back at its first sub-goal.
@@ -266,15 +263,7 @@ fn a_decision_against_the_order_stops_the_arm() {
         task: task.clone(),
         wrong_pick: Some(1),
     };
-    let report = execute::run(
-        &mut sim,
-        &arm,
-        &task,
-        &Planner::Learned {
-            policy: &policy,
-            seed: 3,
-        },
-    );
+    let report = run_learned(&mut sim, &arm, &task, &policy);
     assert!(!report.complete);
     assert_eq!(
         report.violations,

@@ -28,7 +28,7 @@ impl Episode {
     /// The arm's start pose (over the pending area).
     pub fn home(&self) -> Result<Joints> {
         execute::home(&self.arm, &self.task.cell).ok_or_else(|| PipelineError::NoStartPose {
-            cell: self.cell_name().to_owned(),
+            cell: self.task.cell.name.clone(),
         })
     }
 
@@ -40,10 +40,6 @@ impl Episode {
             &self.placements,
             start,
         )?)
-    }
-
-    fn cell_name(&self) -> &str {
-        &self.task.cell.name
     }
 }
 
@@ -97,6 +93,16 @@ pub fn arm_of(robot: &RobotRecord) -> Result<Arm> {
             })
         }
     }
+}
+
+/// The name of the cell a setup packs in.
+pub fn cell_of(compiled: &Compiled, setup: &Setup) -> String {
+    let m = &compiled.model;
+    m.inventories
+        .get(setup.inventory)
+        .and_then(|inv| m.cells.get(inv.cell))
+        .map(|c| c.name.clone())
+        .unwrap_or_default()
 }
 
 /// The episode of a setup (an order's, or a scenario case's).

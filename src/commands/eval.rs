@@ -3,11 +3,11 @@
 
 use crate::Exit;
 use crate::cli::EvalArgs;
-use crate::commands::execute::cell_of;
 use crate::fsio::{FsLoader, write_file_atomically};
 use anyhow::bail;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use packwright_interface::PlannerKind;
+use packwright_pipeline::episode::cell_of;
 use packwright_pipeline::evaluate::{CaseResult, Row, markdown, run_case};
 use packwright_pipeline::models::choose_planner;
 use rayon::prelude::*;

@@ -3,7 +3,6 @@
 use crate::Exit;
 use crate::cli::ExecuteArgs;
 use crate::fsio::FsLoader;
-use packwright_compiler::expand::Setup;
 use packwright_interface::outcome::{Outcome, PlannerKind, Report};
 use packwright_motion::execute::{self, Planner};
 use packwright_pipeline::episode::{episode, find_setup};
@@ -18,16 +17,6 @@ pub fn to_json(name: &str, r: &Report) -> serde_json::Value {
     value
 }
 
-/// The name of the cell a setup packs in.
-pub fn cell_of(compiled: &packwright_compiler::Compiled, setup: &Setup) -> String {
-    let m = &compiled.model;
-    m.inventories
-        .get(setup.inventory)
-        .and_then(|inv| m.cells.get(inv.cell))
-        .map(|c| c.name.clone())
-        .unwrap_or_default()
-}
-
 pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
     let compiled = match packwright_compiler::check(&FsLoader, &args.files) {
         Ok(c) => c,
@@ -36,8 +25,7 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
     let (name, setup) = find_setup(&compiled, args.order.as_deref(), args.scenario.as_deref())?;
     let ep = episode(&compiled.model, &setup)?;
     let mut sim = ep.simulator(ep.home()?)?;
-    let cell_name = cell_of(&compiled, &setup);
-    let (kind, model) = choose_planner(args.planner, args.model.as_deref(), &cell_name)?;
+    let (kind, model) = choose_planner(args.planner, args.model.as_deref(), &ep.task.cell.name)?;
     let planner = match (&model, kind) {
         (Some(nets), _) => Planner::Learned {
             policy: nets,

@@ -10,7 +10,7 @@
 
 use super::reasoner::{f32s, goal_input, graph, in_slot};
 use super::station::{
-    Clock, Connect, Load, MAX_RAISES, RAISE_STEP, SUCCESS_RADIUS, Station, Unchecked,
+    Connect, Load, MAX_RAISES, RAISE_STEP, SUCCESS_RADIUS, Station, Unchecked, judge,
 };
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
@@ -99,10 +99,10 @@ impl From<Failure> for Halt {
 }
 
 /// Why the run stopped: a decision that broke the order, or a failure
-/// while handling the product in row `row` of the report.
+/// while handling a product (already in its report row).
 enum Stopped {
     Violation(Violation),
-    Failed { row: usize, why: Failure },
+    Failed(Failure),
 }
 
 /// One stage's inputs.
@@ -271,10 +271,7 @@ impl<W: World> Learned<'_, W> {
     /// sub-goal) from the released product `name`.
     fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<(), Failure> {
         let started = Instant::now();
-        let load = Load {
-            held: None,
-            ignore: Some(name),
-        };
+        let load = Load::ignoring(name);
         let s = &self.station;
         let start = s.world.observe().joints;
         let up = SubGoal {
@@ -336,27 +333,15 @@ impl<W: World> Learned<'_, W> {
         let s = task.assignment[row].1;
         self.station.restart_clock();
         let result = self.manipulate(p, s);
-        let period = self.station.world.control_period();
-        let after = self.station.world.observe();
-        let Clock { planning_s, steps } = self.station.restart_clock();
-        let report = &mut rows[row];
-        report.planning_s = planning_s;
-        report.execution_s = steps as f64 * period;
-        report.error_m = self.station.error_of(&after, p, s);
-        match result {
-            Ok(()) if report.error_m.is_some_and(|e| e <= SUCCESS_RADIUS) => {
-                report.outcome = Outcome::Packed;
-                Ok(())
-            }
-            Ok(()) => Err(Stopped::Failed {
-                row,
-                why: Failure::Misplaced {
-                    error_m: report.error_m.unwrap_or(f64::NAN),
-                },
-            }),
-            Err(Halt::Failed(why)) => Err(Stopped::Failed { row, why }),
-            Err(Halt::Violation(v)) => Err(Stopped::Violation(v)),
-        }
+        self.station.measure(&mut rows[row], p, s);
+        let handled = match result {
+            // A placing decision that broke the order: the product was
+            // not put anywhere (its row stays "not attempted").
+            Err(Halt::Violation(v)) => return Err(Stopped::Violation(v)),
+            Err(Halt::Failed(why)) => Err(why),
+            Ok(()) => Ok(()),
+        };
+        judge(&mut rows[row], handled).map_err(Stopped::Failed)
     }
 
     fn manipulate(&mut self, p: usize, s: usize) -> Result<(), Halt> {
@@ -373,10 +358,7 @@ impl<W: World> Learned<'_, W> {
             feature: centre,
             label: 0,
             contact: Some(centre[2] + spec.size[2] / 2.0),
-            load: Load {
-                held: None,
-                ignore: Some(name),
-            },
+            load: Load::ignoring(name),
         })?;
         // Placing: the reasoner sees the held product raised.
         let obs = self.station.world.observe();
@@ -409,10 +391,7 @@ impl<W: World> Learned<'_, W> {
             feature: task.box_top(s),
             label: choice.label,
             contact: None,
-            load: Load {
-                held: Some(&held),
-                ignore: None,
-            },
+            load: Load::holding(&held),
         })?;
         self.retreat(goals[1], name)?;
         Ok(())
@@ -465,13 +444,8 @@ pub(super) fn run<W: World>(
     let mut collisions = Vec::new();
     match stop {
         Some(Stopped::Violation(v)) => violations.push(v),
-        Some(Stopped::Failed { row, why }) => {
-            if let Failure::Collision { contact } = &why {
-                collisions.push(contact.clone());
-            }
-            rows[row].outcome = Outcome::Failed(why);
-        }
-        None => {}
+        Some(Stopped::Failed(Failure::Collision { contact })) => collisions.push(contact),
+        Some(Stopped::Failed(_)) | None => {}
     }
     let mut report = runner
         .station

@@ -29,7 +29,7 @@ pub use learned::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps
 pub use reasoner::{expected_next, reasoner_trial};
 pub use station::{HOME_HEIGHT, Load, Unchecked, checked_samples, home, reach};
 
-use packwright_interface::outcome::{Failure, PlannerKind, Report};
+use packwright_interface::outcome::{PlannerKind, Report};
 use packwright_interface::record::MotionLog;
 use packwright_interface::{OrderTask, Policy, World};
 use packwright_kinematics::Arm;
@@ -76,9 +76,4 @@ pub fn run_recorded<W: World>(
     log: &mut MotionLog,
 ) -> Report {
     scripted::run(world, arm, task, station::Connect::Straight, Some(log))
-}
-
-/// Whether a failure is a contact the world reported.
-pub fn is_collision(f: &Failure) -> bool {
-    matches!(f, Failure::Collision { .. })
 }

@@ -4,7 +4,7 @@
 //! joints among the free ones, joined straight or by RRT-Connect; the
 //! expert's runs can be recorded as motion demonstrations.
 
-use super::station::{Clock, Connect, Load, SUCCESS_RADIUS, Station, distance};
+use super::station::{Connect, Load, SUCCESS_RADIUS, Station, distance, judge};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction};
 use nalgebra::Isometry3;
@@ -141,10 +141,7 @@ impl<W: World> Scripted<'_, W> {
         let (centre, yaw) = obs.find(name).ok_or(Failure::Disappeared)?;
         let h = spec.size[2];
         let picking = expert::picking(centre, h, cell.lift);
-        let free = Load {
-            held: None,
-            ignore: Some(name),
-        };
+        let free = Load::ignoring(name);
         let plan = self.plan_stage(obs.joints, &picking, yaw, free)?;
         let pick = StageInfo {
             stage: Stage::Picking,
@@ -168,10 +165,7 @@ impl<W: World> Scripted<'_, W> {
             [cell.base[0], cell.base[1]],
         );
         self.station.sync_products(&obs);
-        let carrying = Load {
-            held: Some(&held),
-            ignore: None,
-        };
+        let carrying = Load::holding(&held);
         // Placing the product square in its slot: yaw 0 (it turns with the cup).
         let plan = self.plan_stage(obs.joints, &placing, 0.0, carrying)?;
         let place = StageInfo {
@@ -208,7 +202,6 @@ pub(super) fn run<W: World>(
         connect,
         log,
     };
-    let period = runner.station.world.control_period();
     let mut products = Vec::new();
     let mut stopped = false;
     let mut collisions = Vec::new();
@@ -232,24 +225,11 @@ pub(super) fn run<W: World>(
                     .push(decided.elapsed().as_secs_f64() * 1e6);
                 runner.station.restart_clock();
                 let result = runner.manipulate(p, s);
-                let after = runner.station.world.observe();
-                report.error_m = runner.station.error_of(&after, p, s);
-                let Clock { planning_s, steps } = runner.station.restart_clock();
-                report.planning_s = planning_s;
-                report.execution_s = steps as f64 * period;
-                report.outcome = match result {
-                    Ok(()) if report.error_m.is_some_and(|e| e <= SUCCESS_RADIUS) => {
-                        Outcome::Packed
-                    }
-                    Ok(()) => Outcome::Failed(Failure::Misplaced {
-                        error_m: report.error_m.unwrap_or(f64::NAN),
-                    }),
-                    Err(why) => Outcome::Failed(why),
-                };
-                if let Outcome::Failed(why) = &report.outcome {
+                runner.station.measure(&mut report, p, s);
+                if let Err(why) = judge(&mut report, result) {
                     stopped = true;
                     if let Failure::Collision { contact } = why {
-                        collisions.push(contact.clone());
+                        collisions.push(contact);
                     }
                 }
             }

@@ -62,6 +62,23 @@ impl<'h> Load<'h> {
         held: None,
         ignore: None,
     };
+
+    /// Nothing held; the product `name` (being picked, or just released)
+    /// is no obstacle.
+    pub fn ignoring(name: &'h str) -> Load<'h> {
+        Load {
+            held: None,
+            ignore: Some(name),
+        }
+    }
+
+    /// Carrying `held`.
+    pub fn holding(held: &'h Held) -> Load<'h> {
+        Load {
+            held: Some(held),
+            ignore: None,
+        }
+    }
 }
 
 /// The arm in its world, with the cell's checker.
@@ -243,6 +260,20 @@ impl<'a, W: World> Station<'a, W> {
         }
     }
 
+    /// Fills in `row` (product `p` for slot `s`) after the robot handled
+    /// it: the planning and motion time since [`restart_clock`] and the
+    /// product's distance from its goal now.
+    ///
+    /// [`restart_clock`]: Station::restart_clock
+    pub fn measure(&mut self, row: &mut ProductReport, p: usize, s: usize) {
+        let period = self.world.control_period();
+        let after = self.world.observe();
+        row.error_m = self.error_of(&after, p, s);
+        let Clock { planning_s, steps } = self.restart_clock();
+        row.planning_s = planning_s;
+        row.execution_s = steps as f64 * period;
+    }
+
     /// How far product `p` is from its goal in slot `s` now.
     pub fn error_of(&self, obs: &Observation, p: usize, s: usize) -> Option<f64> {
         obs.find(&self.task.products[p].name)
@@ -283,6 +314,23 @@ impl<'a, W: World> Station<'a, W> {
 }
 
 pub(crate) use packwright_interface::outcome::SUCCESS_RADIUS;
+
+/// The outcome of a measured `row` whose handling ended with `result`:
+/// packed when it rests within [`SUCCESS_RADIUS`] of its goal, else the
+/// failure (the handling's, or how far it was released from its goal).
+pub(crate) fn judge(row: &mut ProductReport, result: Result<(), Failure>) -> Result<(), Failure> {
+    let result = result.and_then(|()| match row.error_m {
+        Some(e) if e <= SUCCESS_RADIUS => Ok(()),
+        e => Err(Failure::Misplaced {
+            error_m: e.unwrap_or(f64::NAN),
+        }),
+    });
+    row.outcome = match &result {
+        Ok(()) => packwright_interface::Outcome::Packed,
+        Err(why) => packwright_interface::Outcome::Failed(why.clone()),
+    };
+    result
+}
 
 pub(crate) fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
