@@ -57,5 +57,6 @@ pub fn run(cli: cli::Cli) -> anyhow::Result<Exit> {
         cli::Command::Train(args) => commands::train::run(&args),
         cli::Command::Eval(args) => commands::eval::run(&args),
         cli::Command::Fmt(args) => commands::fmt::run(&args),
+        cli::Command::Generate(args) => commands::generate::run(&args),
     }
 }

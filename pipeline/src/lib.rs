@@ -9,6 +9,7 @@ pub mod artifacts;
 pub mod episode;
 pub mod error;
 pub mod evaluate;
+pub mod generate;
 pub mod models;
 pub mod motion_file;
 pub mod replay;

@@ -6,6 +6,7 @@ pub mod demonstrate;
 pub mod eval;
 pub mod execute;
 pub mod fmt;
+pub mod generate;
 pub mod show;
 pub mod train;
 

@@ -1,0 +1,905 @@
+//! Random valid cells, for tests and benchmarks: develop on many random
+//! cells, report on fixed seeds.
+//!
+//! [`family_cell`] turns a seed into one self-contained `.pack` file: a
+//! UR10 cell (base offset, sometimes on a riser; a box on one side of the
+//! robot and the pending area on another), 4 to 10 products, one
+//! inventory, one sparse `demos` block (n = 2 or 3 products, half of the
+//! combinations, one or two slots never used, a random sequence rule) and
+//! six `scenarios` suites that measure what the demonstrations did not
+//! show: larger orders, CASE 2, missing stock and the untaught slots.
+//!
+//! Pure and deterministic: every draw comes from one
+//! `ChaCha8Rng::seed_from_u64(seed)`, so the same seed gives the same bytes
+//! everywhere. Geometry is drawn on a millimetre grid and checked here
+//! against the compiler's rules (reach, slots in their box, slot spacing
+//! for the largest product, products apart and inside the pending area
+//! whatever the jitter), so every file passes `packwright check` and is
+//! laid out as `packwright fmt` would lay it out. Slot and product centres
+//! stay 0.40 to 0.95 m from the base axis ([`REACH_MIN_MM`],
+//! [`REACH_MAX_MM`]), products within 0.60 m when they wait opposite the
+//! box ([`OPPOSITE_PRODUCT_REACH_MM`]).
+
+use rand::seq::{IndexedRandom, SliceRandom, index};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use std::fmt::Write;
+
+/// Jitter of every generated block, millimetres.
+pub const JITTER_MM: i64 = 10;
+/// Scenarios per suite.
+pub const SUITE_COUNT: usize = 50;
+/// The `keep` fraction of the demonstrations.
+pub const KEEP: f64 = 0.5;
+/// Demonstrations a cell aims for (inclusive bounds).
+pub const DEMOS_MIN: u64 = 40;
+pub const DEMOS_MAX: u64 = 200;
+/// Horizontal distance of every slot and product centre from the base
+/// axis, millimetres: well inside the UR10's 0.20..1.30 m so that the
+/// hover, lift and approach poses above them are reachable too.
+pub const REACH_MIN_MM: i64 = 400;
+pub const REACH_MAX_MM: i64 = 950;
+/// Farthest product centre, millimetres, when the products wait on the
+/// side opposite the box: every product then swings 150 to 180 degrees
+/// round the base, and the scripted expert's straight joint motions fail
+/// more often from products far out (measured over 200 random cells, 3
+/// packages each: 33 of 430 such moves failed from 0.55 m and beyond, 6 of
+/// 620 nearer; none when the sides are adjacent).
+pub const OPPOSITE_PRODUCT_REACH_MM: i64 = 600;
+/// Most slots in a box.
+pub const MAX_SLOTS: usize = 9;
+
+/// Where something stands, seen from the robot (world frame = table:
+/// front is +x, left is +y).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    Front,
+    Behind,
+    Left,
+    Right,
+}
+
+impl Side {
+    pub const ALL: [Side; 4] = [Side::Front, Side::Behind, Side::Left, Side::Right];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Side::Front => "front",
+            Side::Behind => "behind",
+            Side::Left => "left",
+            Side::Right => "right",
+        }
+    }
+
+    /// Unit vector from the base axis towards this side.
+    fn radial(self) -> [i64; 2] {
+        match self {
+            Side::Front => [1, 0],
+            Side::Behind => [-1, 0],
+            Side::Left => [0, 1],
+            Side::Right => [0, -1],
+        }
+    }
+
+    /// The radial direction turned 90 degrees anticlockwise.
+    fn tangential(self) -> [i64; 2] {
+        let [x, y] = self.radial();
+        [-y, x]
+    }
+
+    fn phrase(self) -> &'static str {
+        match self {
+            Side::Front => "in front of the robot",
+            Side::Behind => "behind the robot",
+            Side::Left => "on the robot's left",
+            Side::Right => "on the robot's right",
+        }
+    }
+}
+
+/// The taught sequence rule (`sequence` of the `demos` block).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sequence {
+    /// Inventory order.
+    Ascending,
+    /// Inventory order reversed.
+    Descending,
+    /// The order of the `choose` list ([`Generated::priority`]).
+    Listed,
+}
+
+impl Sequence {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Sequence::Ascending => "ascending",
+            Sequence::Descending => "descending",
+            Sequence::Listed => "listed",
+        }
+    }
+}
+
+/// The six suites of every generated cell; a suite is named
+/// `<cell>_<suffix>` (`gen_17_case1_n1`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SuiteKind {
+    /// CASE 1 with the taught n, any slot of the cell.
+    Case1N,
+    /// CASE 1 with n + 1 products.
+    Case1N1,
+    /// CASE 1 with n + 2 products.
+    Case1N2,
+    /// CASE 2: n + 1 products, a worker packs 1 to n of them first.
+    Case2,
+    /// n + 1 products, 1 or 2 of them out of stock.
+    Missing,
+    /// n products into the untaught slots and n - 1 taught ones: every
+    /// scenario uses at least one slot no demonstration used.
+    Untaught,
+}
+
+impl SuiteKind {
+    pub const ALL: [SuiteKind; 6] = [
+        SuiteKind::Case1N,
+        SuiteKind::Case1N1,
+        SuiteKind::Case1N2,
+        SuiteKind::Case2,
+        SuiteKind::Missing,
+        SuiteKind::Untaught,
+    ];
+
+    pub fn suffix(self) -> &'static str {
+        match self {
+            SuiteKind::Case1N => "case1_n",
+            SuiteKind::Case1N1 => "case1_n1",
+            SuiteKind::Case1N2 => "case1_n2",
+            SuiteKind::Case2 => "case2",
+            SuiteKind::Missing => "missing",
+            SuiteKind::Untaught => "untaught",
+        }
+    }
+}
+
+/// One generated `scenarios` block.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GeneratedSuite {
+    pub kind: SuiteKind,
+    pub name: String,
+    /// N of its `choose` (products per package).
+    pub n: usize,
+    /// The slots of its `into` list.
+    pub slots: Vec<String>,
+    pub count: usize,
+    pub seed: u64,
+}
+
+/// A generated cell: the `.pack` text and what a caller needs to know
+/// about it without compiling it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Generated {
+    pub seed: u64,
+    /// `gen_<seed>`: the cell's name and the file's stem. Every global
+    /// name in the file starts with it, so that several generated files
+    /// can be compiled together.
+    pub name: String,
+    /// The whole file, formatted canonically.
+    pub text: String,
+    pub inventory: String,
+    /// The `demos` block.
+    pub demos: String,
+    /// N of the demonstrations (2 or 3).
+    pub taught_n: usize,
+    pub sequence: Sequence,
+    /// The products of the `demos` block's `choose` list: the priority
+    /// order when [`Sequence::Listed`], else the inventory order.
+    pub priority: Vec<String>,
+    /// Products in inventory order (graph node order).
+    pub products: Vec<String>,
+    /// Slots in declaration order (label i + 1).
+    pub slots: Vec<String>,
+    /// The slots of the `demos` block, in declaration order.
+    pub taught_slots: Vec<String>,
+    /// The slots no demonstration uses (one or two).
+    pub untaught_slots: Vec<String>,
+    /// `repeat` of the `demos` block (1 or 2).
+    pub repeat: usize,
+    /// How many demonstrations the `demos` block expands to.
+    pub demonstrations: usize,
+    pub box_side: Side,
+    pub pending_side: Side,
+    /// The base, metres (z > 0: on a riser).
+    pub base: [f64; 3],
+    pub suites: Vec<GeneratedSuite>,
+}
+
+impl Generated {
+    /// `gen_<seed>.pack`.
+    pub fn file_name(&self) -> String {
+        format!("{}.pack", self.name)
+    }
+
+    /// True when the robot stands on a riser (base z > 0).
+    pub fn riser(&self) -> bool {
+        self.base[2] > 0.0
+    }
+
+    pub fn suite(&self, kind: SuiteKind) -> &GeneratedSuite {
+        self.suites
+            .iter()
+            .find(|s| s.kind == kind)
+            .expect("every generated cell has every suite")
+    }
+
+    /// The suite names, in file order.
+    pub fn suite_names(&self) -> Vec<String> {
+        self.suites.iter().map(|s| s.name.clone()).collect()
+    }
+}
+
+/// The name of the cell (and file stem) for `seed`.
+pub fn cell_name(seed: u64) -> String {
+    format!("gen_{seed}")
+}
+
+/// The suite of `kind` of the cell generated from `seed`.
+pub fn suite_name(seed: u64, kind: SuiteKind) -> String {
+    format!("{}_{}", cell_name(seed), kind.suffix())
+}
+
+/// C(n, k).
+fn binomial(n: u64, k: u64) -> u64 {
+    (0..k).fold(1, |c, i| c * (n - i) / (i + 1))
+}
+
+/// n! / (n - k)!.
+fn arrangements(n: u64, k: u64) -> u64 {
+    (0..k).map(|i| n - i).product()
+}
+
+/// Demonstrations of `choose n of <m products> into <k slots>` with
+/// `keep` [`KEEP`] and `repeat` 1: the kept combinations (rounded as the
+/// compiler rounds) times every arrangement of n of the k slots.
+pub fn demonstrations(m: usize, k: usize, n: usize) -> u64 {
+    let combos = binomial(m as u64, n as u64);
+    let kept = ((KEEP * combos as f64).round() as u64).min(combos);
+    kept * arrangements(k as u64, n as u64)
+}
+
+/// The taught slots' count and `repeat` that give [`DEMOS_MIN`] to
+/// [`DEMOS_MAX`] demonstrations, for n of m products and `slots` slots
+/// with `untaught` of them left out; `None` if there is none.
+fn repeat_for(m: usize, slots: usize, untaught: usize, n: usize) -> Option<usize> {
+    let k = slots.checked_sub(untaught)?;
+    if k < n {
+        return None;
+    }
+    let once = demonstrations(m, k, n);
+    let repeat = if once < DEMOS_MIN { 2 } else { 1 };
+    (DEMOS_MIN..=DEMOS_MAX)
+        .contains(&(once * repeat))
+        .then_some(repeat as usize)
+}
+
+/// `(slots, untaught)` pairs that give a good number of demonstrations.
+fn slot_options(m: usize, n: usize) -> Vec<(usize, usize)> {
+    (n + 2..=MAX_SLOTS)
+        .flat_map(|s| [(s, 1), (s, 2)])
+        .filter(|&(s, u)| repeat_for(m, s, u, n).is_some())
+        .collect()
+}
+
+/// Millimetres as metres with three decimals (`-0.050`).
+fn metres(mm: i64) -> String {
+    let sign = if mm < 0 { "-" } else { "" };
+    format!("{sign}{}.{:03}", mm.abs() / 1000, mm.abs() % 1000)
+}
+
+fn point(p: [i64; 2]) -> String {
+    format!("({}, {})", metres(p[0]), metres(p[1]))
+}
+
+/// A multiple of `step` from `low` to `high` (inclusive).
+fn stepped(rng: &mut ChaCha8Rng, low: i64, high: i64, step: i64) -> i64 {
+    low + step * rng.random_range(0..=(high - low) / step)
+}
+
+fn round_up(v: i64, step: i64) -> i64 {
+    (v + step - 1).div_euclid(step) * step
+}
+
+/// An axis-aligned rectangle, millimetres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Rect {
+    min: [i64; 2],
+    max: [i64; 2],
+}
+
+impl Rect {
+    /// Clearance between two rectangles (negative if they overlap): the
+    /// larger of the gaps along x and along y.
+    fn gap(&self, o: &Rect) -> i64 {
+        let gx = (o.min[0] - self.max[0]).max(self.min[0] - o.max[0]);
+        let gy = (o.min[1] - self.max[1]).max(self.min[1] - o.max[1]);
+        gx.max(gy)
+    }
+
+    fn contains(&self, o: &Rect) -> bool {
+        self.min[0] <= o.min[0]
+            && self.min[1] <= o.min[1]
+            && o.max[0] <= self.max[0]
+            && o.max[1] <= self.max[1]
+    }
+
+    fn grown(&self, by: i64) -> Rect {
+        Rect {
+            min: [self.min[0] - by, self.min[1] - by],
+            max: [self.max[0] + by, self.max[1] + by],
+        }
+    }
+
+    fn centred(c: [i64; 2], half: [i64; 2]) -> Rect {
+        Rect {
+            min: [c[0] - half[0], c[1] - half[1]],
+            max: [c[0] + half[0], c[1] + half[1]],
+        }
+    }
+}
+
+/// A frame on the table: the base's (x, y), a side's radial and
+/// tangential directions. Local (r, t) millimetres to world.
+struct Frame {
+    base: [i64; 2],
+    side: Side,
+}
+
+impl Frame {
+    fn world(&self, r: i64, t: i64) -> [i64; 2] {
+        let (u, v) = (self.side.radial(), self.side.tangential());
+        [
+            self.base[0] + r * u[0] + t * v[0],
+            self.base[1] + r * u[1] + t * v[1],
+        ]
+    }
+
+    /// The world rectangle of local radial `r0..r1` and tangential `t0..t1`.
+    fn rect(&self, r: [i64; 2], t: [i64; 2]) -> Rect {
+        let a = self.world(r[0], t[0]);
+        let b = self.world(r[1], t[1]);
+        Rect {
+            min: [a[0].min(b[0]), a[1].min(b[1])],
+            max: [a[0].max(b[0]), a[1].max(b[1])],
+        }
+    }
+}
+
+struct Product {
+    name: String,
+    /// Width (x), depth (y), height (z), millimetres.
+    size: [i64; 3],
+    cube: bool,
+    /// Hundredths of a kilogram.
+    mass: Option<i64>,
+}
+
+impl Product {
+    /// Half sizes rounded up: a conservative footprint on the mm grid.
+    fn footprint(&self, at: [i64; 2]) -> Rect {
+        Rect::centred(at, [(self.size[0] + 1) / 2, (self.size[1] + 1) / 2])
+    }
+}
+
+struct Layout {
+    box_centre: [i64; 2],
+    box_size: [i64; 3],
+    box_rect: Rect,
+    slots: Vec<(String, [i64; 2])>,
+    pending: Rect,
+    positions: Vec<[i64; 2]>,
+}
+
+fn distance(base: [i64; 2], p: [i64; 2]) -> f64 {
+    ((p[0] - base[0]) as f64).hypot((p[1] - base[1]) as f64)
+}
+
+/// Grid rows for `items` items in at most `max_rows` rows of at most
+/// `max_cols` columns, every row used: `(rows, columns)` options.
+fn grids(items: usize, max_rows: usize, max_cols: usize) -> Vec<(usize, usize)> {
+    (1..=max_rows)
+        .map(|rows| (rows, items.div_ceil(rows)))
+        .filter(|&(rows, cols)| cols <= max_cols && (rows - 1) * cols < items)
+        .collect()
+}
+
+/// Draws the box with its slots and the pending area with the products;
+/// `None` when the draw breaks a rule (the caller draws again).
+fn draw_layout(
+    rng: &mut ChaCha8Rng,
+    base: [i64; 2],
+    box_side: Side,
+    pending_side: Side,
+    products: &[Product],
+    slot_count: usize,
+) -> Option<Layout> {
+    let largest = products
+        .iter()
+        .map(|p| p.size[0].max(p.size[1]))
+        .max()
+        .unwrap_or(0);
+    let half = (largest + 1) / 2;
+
+    // The box: rows of slots running across the radial direction, the
+    // nearest row first; slots a pitch apart that fits the largest product
+    // with a gap, the box a margin wider than the slots' products.
+    let bx = Frame {
+        base,
+        side: box_side,
+    };
+    let (rows, cols) = *grids(slot_count, 3, 6).choose(rng)?;
+    let pitch = round_up(largest + stepped(rng, 15, 30, 5), 10);
+    let r0 = stepped(rng, 450, 600, 10);
+    let t0 = stepped(rng, -50, 50, 10);
+    let margin = stepped(rng, 10, 25, 5);
+    let height = stepped(rng, 60, 100, 10);
+    let mut slots = Vec::with_capacity(slot_count);
+    for i in 0..slot_count {
+        let (row, col) = ((i / cols) as i64, (i % cols) as i64);
+        let r = r0 + row * pitch;
+        let t = t0 + (2 * col - (cols as i64 - 1)) * pitch / 2;
+        let name = format!("{}{}", (b'a' + row as u8) as char, col + 1);
+        slots.push((name, bx.world(r, t)));
+    }
+    let (rows, cols) = (rows as i64, cols as i64);
+    let half_r = (rows - 1) * pitch / 2 + half + margin;
+    let half_t = (cols - 1) * pitch / 2 + half + margin;
+    let centre_r = r0 + (rows - 1) * pitch / 2;
+    let box_rect = bx.rect(
+        [centre_r - half_r, centre_r + half_r],
+        [t0 - half_t, t0 + half_t],
+    );
+    let box_centre = bx.world(centre_r, t0);
+    let box_size = [
+        box_rect.max[0] - box_rect.min[0],
+        box_rect.max[1] - box_rect.min[1],
+        height,
+    ];
+
+    // The pending area: products in rows a pitch apart that keeps them
+    // apart, and inside the area, whatever the jitter.
+    let pf = Frame {
+        base,
+        side: pending_side,
+    };
+    let (prows, pcols) = *grids(products.len(), 3, 5).choose(rng)?;
+    let ppitch = round_up(largest + 2 * JITTER_MM + stepped(rng, 10, 40, 5), 10);
+    let opposite = pending_side.radial() == box_side.radial().map(|v| -v);
+    let product_reach = if opposite {
+        OPPOSITE_PRODUCT_REACH_MM
+    } else {
+        REACH_MAX_MM
+    };
+    let p0 = stepped(rng, 420, if opposite { 470 } else { 520 }, 10);
+    let pt0 = stepped(rng, -50, 50, 10);
+    let edge = half + JITTER_MM + stepped(rng, 10, 30, 5);
+    let mut positions = Vec::with_capacity(products.len());
+    for i in 0..products.len() {
+        let (row, col) = ((i / pcols) as i64, (i % pcols) as i64);
+        let r = p0 + row * ppitch;
+        let t = pt0 + (2 * col - (pcols as i64 - 1)) * ppitch / 2;
+        positions.push(pf.world(r, t));
+    }
+    let (prows, pcols) = (prows as i64, pcols as i64);
+    let span_t = (pcols - 1) * ppitch / 2;
+    let pending = pf.rect(
+        [p0 - edge, p0 + (prows - 1) * ppitch + edge],
+        [pt0 - span_t - edge, pt0 + span_t + edge],
+    );
+
+    let layout = Layout {
+        box_centre,
+        box_size,
+        box_rect,
+        slots,
+        pending,
+        positions,
+    };
+    layout_is_valid(&layout, base, products, product_reach).then_some(layout)
+}
+
+/// The compiler's rules (and this module's stricter margins) on a layout;
+/// products at most `product_reach` millimetres from the base axis.
+fn layout_is_valid(l: &Layout, base: [i64; 2], products: &[Product], product_reach: i64) -> bool {
+    let within =
+        |p: [i64; 2], max: i64| (REACH_MIN_MM as f64..=max as f64).contains(&distance(base, p));
+    // Box and pending area apart, with room between them.
+    if l.box_rect.gap(&l.pending) < 30 {
+        return false;
+    }
+    // Slots: reachable; every product fits every slot with 5 mm to spare;
+    // any two products in any two slots apart by 5 mm.
+    for (i, (_, s)) in l.slots.iter().enumerate() {
+        if !within(*s, REACH_MAX_MM) {
+            return false;
+        }
+        if products
+            .iter()
+            .any(|p| !l.box_rect.contains(&p.footprint(*s).grown(5)))
+        {
+            return false;
+        }
+        for (_, t) in &l.slots[..i] {
+            for a in products {
+                for b in products {
+                    if a.footprint(*s).gap(&b.footprint(*t)) < 5 {
+                        return false;
+                    }
+                }
+            }
+        }
+    }
+    // Products: reachable; inside the pending area and apart, for any
+    // jitter up to JITTER_MM on each axis.
+    let grown = |p: &Product, at: [i64; 2]| p.footprint(at).grown(JITTER_MM);
+    for (i, (p, at)) in products.iter().zip(&l.positions).enumerate() {
+        if !within(*at, product_reach) || !l.pending.contains(&grown(p, *at)) {
+            return false;
+        }
+        for (q, other) in products[..i].iter().zip(&l.positions) {
+            if grown(p, *at).gap(&grown(q, *other)) < 5 {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// The cell generated from `seed`: see the module documentation.
+pub fn family_cell(seed: u64) -> Generated {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let name = cell_name(seed);
+
+    // Sizes: n, m, slots, untaught slots, such that the sparse teaching
+    // gives a good number of demonstrations.
+    let n: usize = rng.random_range(2..=3);
+    let ms: Vec<usize> = (n + 2..=10)
+        .filter(|&m| !slot_options(m, n).is_empty())
+        .collect();
+    let m = *ms.choose(&mut rng).expect("some product count fits");
+    let (slot_count, untaught_count) = *slot_options(m, n)
+        .choose(&mut rng)
+        .expect("some slot count fits");
+    let repeat = repeat_for(m, slot_count, untaught_count, n).expect("checked");
+
+    // Products.
+    let products: Vec<Product> = (1..=m)
+        .map(|i| {
+            let cube = rng.random_bool(0.5);
+            let size = if cube {
+                let l = stepped(&mut rng, 30, 60, 5);
+                [l, l, l]
+            } else {
+                [
+                    stepped(&mut rng, 30, 60, 5),
+                    stepped(&mut rng, 30, 60, 5),
+                    stepped(&mut rng, 25, 60, 5),
+                ]
+            };
+            let mass = rng
+                .random_bool(1.0 / 3.0)
+                .then(|| stepped(&mut rng, 5, 50, 5));
+            Product {
+                name: format!("{name}_p{i}"),
+                size,
+                cube,
+                mass,
+            }
+        })
+        .collect();
+
+    // The cell.
+    let box_side = *Side::ALL.choose(&mut rng).expect("four sides");
+    let others: Vec<Side> = Side::ALL.into_iter().filter(|s| *s != box_side).collect();
+    let pending_side = *others.choose(&mut rng).expect("three sides");
+    let base = [
+        stepped(&mut rng, -300, 300, 10),
+        stepped(&mut rng, -300, 300, 10),
+        if rng.random_bool(1.0 / 3.0) {
+            stepped(&mut rng, 50, 300, 10)
+        } else {
+            0
+        },
+    ];
+    let suction = stepped(&mut rng, 80, 120, 5);
+    let lift = rng
+        .random_bool(0.5)
+        .then(|| stepped(&mut rng, 100, 200, 10));
+    let layout = (0..1000)
+        .find_map(|_| {
+            draw_layout(
+                &mut rng,
+                [base[0], base[1]],
+                box_side,
+                pending_side,
+                &products,
+                slot_count,
+            )
+        })
+        .expect("a valid layout within 1000 draws");
+
+    // Teaching: n of all products into all slots but the untaught ones.
+    let mut untaught_idx = index::sample(&mut rng, slot_count, untaught_count).into_vec();
+    untaught_idx.sort_unstable();
+    let slot_names: Vec<String> = layout.slots.iter().map(|(s, _)| s.clone()).collect();
+    let taught_idx: Vec<usize> = (0..slot_count)
+        .filter(|i| !untaught_idx.contains(i))
+        .collect();
+    let taught_slots: Vec<String> = taught_idx.iter().map(|&i| slot_names[i].clone()).collect();
+    let untaught_slots: Vec<String> = untaught_idx
+        .iter()
+        .map(|&i| slot_names[i].clone())
+        .collect();
+    let sequence = *[Sequence::Ascending, Sequence::Descending, Sequence::Listed]
+        .choose(&mut rng)
+        .expect("three rules");
+    let product_names: Vec<String> = products.iter().map(|p| p.name.clone()).collect();
+    let mut priority = product_names.clone();
+    if sequence == Sequence::Listed {
+        // A priority list that is not the inventory order.
+        while priority == product_names {
+            priority.shuffle(&mut rng);
+        }
+    }
+    let demos_seed = rng.random_range(1..=9999u64);
+
+    // Suites.
+    let mut untaught_into: Vec<usize> = index::sample(&mut rng, taught_idx.len(), n - 1)
+        .into_iter()
+        .map(|i| taught_idx[i])
+        .chain(untaught_idx.iter().copied())
+        .collect();
+    untaught_into.sort_unstable();
+    let suites: Vec<GeneratedSuite> = SuiteKind::ALL
+        .into_iter()
+        .map(|kind| {
+            let (n, slots) = match kind {
+                SuiteKind::Case1N => (n, slot_names.clone()),
+                SuiteKind::Case1N1 | SuiteKind::Case2 | SuiteKind::Missing => {
+                    (n + 1, slot_names.clone())
+                }
+                SuiteKind::Case1N2 => (n + 2, slot_names.clone()),
+                SuiteKind::Untaught => (
+                    n,
+                    untaught_into
+                        .iter()
+                        .map(|&i| slot_names[i].clone())
+                        .collect(),
+                ),
+            };
+            GeneratedSuite {
+                kind,
+                name: suite_name(seed, kind),
+                n,
+                slots,
+                count: SUITE_COUNT,
+                seed: rng.random_range(1..=99999u64),
+            }
+        })
+        .collect();
+
+    let demonstrations = demonstrations(m, taught_slots.len(), n) as usize * repeat;
+    let inventory = format!("{name}_stock");
+    let demos = format!("{name}_teach");
+
+    // The text, in canonical layout.
+    let mut t = String::new();
+    let riser = if base[2] > 0 {
+        format!(" The robot stands on a {} mm riser.", base[2])
+    } else {
+        String::new()
+    };
+    let _ = writeln!(
+        t,
+        "# {name}: a random cell from `packwright generate --seed {seed}`;"
+    );
+    let _ = writeln!(t, "# regenerate it rather than edit it.");
+    let _ = writeln!(t, "# The box stands {}.", box_side.phrase());
+    let _ = writeln!(t, "# The products wait {}.{riser}", pending_side.phrase());
+    t.push('\n');
+    let _ = writeln!(t, "cell {name} {{");
+    let _ = writeln!(t, "  robot ur10");
+    let _ = writeln!(
+        t,
+        "  base ({}, {}, {})",
+        metres(base[0]),
+        metres(base[1]),
+        metres(base[2])
+    );
+    let _ = writeln!(t, "  suction {suction} mm");
+    if let Some(lift) = lift {
+        let _ = writeln!(t, "  lift {lift} mm");
+    }
+    let _ = writeln!(
+        t,
+        "  pending {} to {}",
+        point(layout.pending.min),
+        point(layout.pending.max)
+    );
+    let [w, d, h] = layout.box_size;
+    let _ = writeln!(
+        t,
+        "  box carton {} size ({w} mm, {d} mm, {h} mm)",
+        point(layout.box_centre)
+    );
+    for (s, at) in &layout.slots {
+        let _ = writeln!(t, "  slot {s} {}", point(*at));
+    }
+    let _ = writeln!(t, "}}");
+    t.push('\n');
+    for p in &products {
+        let shape = if p.cube {
+            format!("cube {} mm", p.size[0])
+        } else {
+            format!("box ({} mm, {} mm, {} mm)", p.size[0], p.size[1], p.size[2])
+        };
+        let mass = p
+            .mass
+            .map_or(String::new(), |cg| format!(" mass 0.{cg:02}"));
+        let _ = writeln!(t, "product {} {shape}{mass}", p.name);
+    }
+    t.push('\n');
+    let _ = writeln!(t, "inventory {inventory} for {name} {{");
+    for (p, at) in products.iter().zip(&layout.positions) {
+        let _ = writeln!(t, "  {} {}", p.name, point(*at));
+    }
+    let _ = writeln!(t, "}}");
+    t.push('\n');
+    let _ = writeln!(
+        t,
+        "# Sparse teaching: {n} of {m} products, half of the combinations, {} never used;",
+        if untaught_slots.len() == 1 {
+            format!("slot {}", untaught_slots[0])
+        } else {
+            format!("slots {}", untaught_slots.join(" and "))
+        }
+    );
+    let _ = writeln!(
+        t,
+        "# {demonstrations} demonstrations, packed in {} order.",
+        match sequence {
+            Sequence::Ascending => "product",
+            Sequence::Descending => "reverse product",
+            Sequence::Listed => "the listed",
+        }
+    );
+    let _ = writeln!(t, "demos {demos} for {inventory} {{");
+    let _ = writeln!(
+        t,
+        "  choose {n} of {} into {}",
+        priority.join(", "),
+        taught_slots.join(", ")
+    );
+    let _ = writeln!(t, "  keep {KEEP}");
+    let _ = writeln!(t, "  jitter {JITTER_MM} mm");
+    let _ = writeln!(t, "  sequence {}", sequence.as_str());
+    if repeat > 1 {
+        let _ = writeln!(t, "  repeat {repeat}");
+    }
+    let _ = writeln!(t, "  seed {demos_seed}");
+    let _ = writeln!(t, "}}");
+    for s in &suites {
+        t.push('\n');
+        let about = match s.kind {
+            SuiteKind::Case1N => "# CASE 1 with the taught n, into any slot.".to_owned(),
+            SuiteKind::Case1N1 => "# CASE 1 with one product more than taught.".to_owned(),
+            SuiteKind::Case1N2 => "# CASE 1 with two products more than taught.".to_owned(),
+            SuiteKind::Case2 => {
+                format!(
+                    "# CASE 2: a worker first packs 1 to {n} of the {} products.",
+                    n + 1
+                )
+            }
+            SuiteKind::Missing => {
+                "# Missing stock: 1 or 2 of the products have not arrived.".to_owned()
+            }
+            SuiteKind::Untaught => {
+                "# Untaught slots: every package uses a slot no demonstration used.".to_owned()
+            }
+        };
+        let _ = writeln!(t, "{about}");
+        let _ = writeln!(t, "scenarios {} for {inventory} {{", s.name);
+        let _ = writeln!(
+            t,
+            "  choose {} of {} into {}",
+            s.n,
+            product_names.join(", "),
+            s.slots.join(", ")
+        );
+        match s.kind {
+            SuiteKind::Case2 => {
+                let _ = writeln!(t, "  human packs 1 to {n}");
+            }
+            SuiteKind::Missing => {
+                let _ = writeln!(t, "  missing 1 to 2");
+            }
+            _ => {}
+        }
+        let _ = writeln!(t, "  jitter {JITTER_MM} mm");
+        let _ = writeln!(t, "  count {}", s.count);
+        let _ = writeln!(t, "  seed {}", s.seed);
+        let _ = writeln!(t, "}}");
+    }
+
+    Generated {
+        seed,
+        name,
+        text: t,
+        inventory,
+        demos,
+        taught_n: n,
+        sequence,
+        priority,
+        products: product_names,
+        slots: slot_names,
+        taught_slots,
+        untaught_slots,
+        repeat,
+        demonstrations,
+        box_side,
+        pending_side,
+        base: base.map(|v| v as f64 / 1000.0),
+        suites,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use packwright_compiler::{MemoryLoader, check};
+    use std::path::PathBuf;
+
+    #[test]
+    fn demonstration_counts_follow_the_compiler() {
+        // C(5,3) = 10 combinations, 5 kept, x 3! arrangements of 3 slots.
+        assert_eq!(demonstrations(5, 3, 3), 30);
+        // C(6,2) = 15, 7.5 rounds to 8, x 4 x 3.
+        assert_eq!(demonstrations(6, 4, 2), 96);
+        for n in 2..=3 {
+            for m in n + 2..=10 {
+                for (s, u) in slot_options(m, n) {
+                    let r = repeat_for(m, s, u, n).unwrap() as u64;
+                    let d = demonstrations(m, s - u, n) * r;
+                    assert!((DEMOS_MIN..=DEMOS_MAX).contains(&d), "{m} {s} {u} {n}");
+                }
+            }
+        }
+        assert_eq!(metres(-50), "-0.050");
+        assert_eq!(metres(0), "0.000");
+        assert_eq!(metres(1234), "1.234");
+    }
+
+    #[test]
+    fn a_generated_cell_compiles_cleanly_and_is_deterministic() {
+        for seed in [0, 7, 123] {
+            let g = family_cell(seed);
+            assert_eq!(g, family_cell(seed));
+            assert_eq!(packwright_grammar::format(&g.text).unwrap(), g.text);
+            let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
+            let compiled = match check(&loader, &[PathBuf::from(g.file_name())]) {
+                Ok(c) => c,
+                Err(failed) => panic!("seed {seed}:\n{}\n{}", failed.render(), g.text),
+            };
+            assert_eq!(compiled.expanded.demonstrations.len(), g.demonstrations);
+            let names: Vec<&str> = compiled
+                .expanded
+                .suites
+                .iter()
+                .map(|s| s.name.as_str())
+                .collect();
+            assert_eq!(names, g.suite_names());
+            assert!(g.untaught_slots.len() == 1 || g.untaught_slots.len() == 2);
+        }
+        assert_ne!(family_cell(1).text, family_cell(2).text);
+    }
+}

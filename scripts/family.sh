@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# Learn and measure on a family of random cells (`packwright generate`):
+# for each seed, generate gen_SEED.pack, compile it, train a model on its
+# sparse demonstrations and evaluate its six suites (CASE 1 with n, n+1 and
+# n+2 products, CASE 2, missing stock, untaught slots) with the baselines,
+# then print one row per suite and planner.
+#
+# Develop on many random seeds; report on the fixed ones below.
+#
+# Usage: scripts/family.sh [SEED...]          (default: $SEEDS)
+# Environment:
+#   PACKWRIGHT  the binary (default: target/release/packwright)
+#   WORK        where the files go (default: a new directory under /tmp);
+#               per seed: gen_SEED.pack, gen_SEED.out/, gen_SEED.model/,
+#               gen_SEED.eval.json
+#   TRAIN_ARGS  extra arguments for `packwright train` (e.g. "--epochs 50")
+
+set -euo pipefail
+
+# The seeds reported on.
+SEEDS="0 1 2 3 4"
+
+cd "$(dirname "$0")/.."
+bin=${PACKWRIGHT:-${CARGO_TARGET_DIR:-target}/release/packwright}
+if [ ! -x "$bin" ]; then
+  echo "family.sh: no binary at $bin (cargo build --release, or set PACKWRIGHT)" >&2
+  exit 2
+fi
+if [ $# -gt 0 ]; then
+  seeds=("$@")
+else
+  read -ra seeds <<<"$SEEDS"
+fi
+read -ra train_args <<<"${TRAIN_ARGS:-}"
+work=${WORK:-$(mktemp -d "${TMPDIR:-/tmp}/packwright-family.XXXXXX")}
+mkdir -p "$work"
+
+for seed in "${seeds[@]}"; do
+  pack=$work/gen_$seed.pack
+  echo "== gen_$seed" >&2
+  "$bin" generate --seed "$seed" -o "$work" >/dev/null
+  "$bin" compile "$pack" -o "$work/gen_$seed.out" >&2
+  # Exit 1: some demonstration could not be replayed; the model is written.
+  rc=0
+  "$bin" train "$work/gen_$seed.out" -o "$work/gen_$seed.model" --quiet \
+    ${train_args[@]+"${train_args[@]}"} >&2 || rc=$?
+  if [ "$rc" -gt 1 ]; then
+    echo "family.sh: training gen_$seed failed (exit $rc)" >&2
+    exit "$rc"
+  fi
+  "$bin" eval "$pack" --model "$work/gen_$seed.model" --baselines --json \
+    >"$work/gen_$seed.eval.json"
+done
+
+# Summary: one row per suite and planner (SR = whole-system success rate).
+echo "files in $work"
+if ! command -v jq >/dev/null; then
+  echo "(install jq for the summary table; the figures are in $work/gen_*.eval.json)"
+  exit 0
+fi
+{
+  printf 'suite\tplanner\tscenarios\treasoner SR\tSR\n'
+  for seed in "${seeds[@]}"; do
+    jq -r '
+      def pct: if . == null then "-" else (.rate * 100 | round / 100 | tostring) end;
+      .rows[] | [.suite, .planner, .scenarios, (.reasoner_sr | pct), (.sr | pct)] | @tsv
+    ' "$work/gen_$seed.eval.json"
+  done
+} | column -t -s $'\t'

@@ -1,0 +1,34 @@
+//! `packwright generate`: random valid cells for tests and benchmarks (the
+//! generator is `packwright_pipeline::generate`; this is the file edge).
+
+use crate::Exit;
+use crate::cli::GenerateArgs;
+use crate::fsio::write_file_atomically;
+use anyhow::{Context, bail};
+use packwright_pipeline::generate::family_cell;
+use std::fs;
+
+pub fn run(args: &GenerateArgs) -> anyhow::Result<Exit> {
+    let last = args
+        .count
+        .checked_sub(1)
+        .and_then(|k| args.seed.checked_add(k));
+    let Some(last) = last else {
+        bail!(
+            "--count must be at least 1, and SEED + COUNT - 1 at most {}",
+            u64::MAX
+        );
+    };
+    if args.output.exists() && !args.output.is_dir() {
+        bail!("{} exists and is not a directory", args.output.display());
+    }
+    fs::create_dir_all(&args.output)
+        .with_context(|| format!("cannot create {}", args.output.display()))?;
+    for seed in args.seed..=last {
+        let generated = family_cell(seed);
+        let path = args.output.join(generated.file_name());
+        write_file_atomically(&path, generated.text.as_bytes())?;
+        outln!("{}", path.display());
+    }
+    Ok(Exit::Success)
+}

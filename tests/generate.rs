@@ -1,0 +1,279 @@
+//! The generator of random cells (`packwright_pipeline::generate`) and the
+//! `packwright generate` command: every generated file compiles without a
+//! diagnostic and is laid out canonically, the same seed gives the same
+//! bytes, the family covers every box side and a riser, and the suites
+//! measure what they say (untaught slots really used, CASE 2, missing
+//! stock, larger orders).
+
+mod common;
+use common::{packwright, scratch};
+use packwright_compiler::{Compiled, MemoryLoader, check};
+use packwright_pipeline::generate::{Generated, Side, SuiteKind, family_cell, suite_name};
+use std::collections::BTreeSet;
+use std::fs;
+use std::path::PathBuf;
+
+/// Seeds every test here covers.
+const SEEDS: std::ops::Range<u64> = 0..40;
+
+fn compile(g: &Generated) -> Compiled {
+    let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
+    match check(&loader, &[PathBuf::from(g.file_name())]) {
+        Ok(c) => c,
+        Err(failed) => panic!(
+            "seed {}: {} diagnostics\n{}\n{}",
+            g.seed,
+            failed.errors.len(),
+            failed.render(),
+            g.text
+        ),
+    }
+}
+
+#[test]
+fn every_generated_cell_compiles_cleanly_and_canonically() {
+    for seed in SEEDS {
+        let g = family_cell(seed);
+        let c = compile(&g);
+        assert_eq!(
+            packwright_grammar::format(&g.text).expect("parses"),
+            g.text,
+            "seed {seed}: not laid out canonically"
+        );
+        let m = &c.model;
+        assert_eq!(m.cells.len(), 1);
+        assert_eq!(m.cells[0].name, g.name);
+        assert_eq!(m.products.len(), g.products.len());
+        assert!((4..=10).contains(&g.products.len()), "seed {seed}");
+        assert!(g.taught_n == 2 || g.taught_n == 3, "seed {seed}");
+        assert!(g.slots.len() >= g.taught_n + 2, "seed {seed}");
+        assert_eq!(c.expanded.demonstrations.len(), g.demonstrations);
+        assert!(
+            (40..=200).contains(&g.demonstrations),
+            "seed {seed}: {} demonstrations",
+            g.demonstrations
+        );
+        let base = m.cells[0].base;
+        assert_eq!(base, g.base, "seed {seed}");
+        assert!(base[0].abs() <= 0.3 && base[1].abs() <= 0.3 && (0.0..=0.3).contains(&base[2]));
+    }
+}
+
+#[test]
+fn the_same_seed_gives_the_same_bytes_and_different_seeds_differ() {
+    let mut texts = BTreeSet::new();
+    for seed in SEEDS {
+        let g = family_cell(seed);
+        assert_eq!(g, family_cell(seed), "seed {seed}");
+        assert!(texts.insert(g.text), "seed {seed} repeats an earlier cell");
+    }
+}
+
+#[test]
+fn every_file_has_the_expected_blocks() {
+    for seed in SEEDS {
+        let g = family_cell(seed);
+        let t = &g.text;
+        assert_eq!(g.name, format!("gen_{seed}"));
+        assert_eq!(g.file_name(), format!("gen_{seed}.pack"));
+        for needle in [
+            format!("cell gen_{seed} {{\n  robot ur10\n  base ("),
+            "\n  suction ".to_owned(),
+            "\n  pending (".to_owned(),
+            "\n  box carton (".to_owned(),
+            format!("\ninventory {} for gen_{seed} {{\n", g.inventory),
+            format!("\ndemos {} for {} {{\n", g.demos, g.inventory),
+            format!(
+                "\n  choose {} of {} into {}\n  keep 0.5\n  jitter 10 mm\n  sequence {}\n",
+                g.taught_n,
+                g.priority.join(", "),
+                g.taught_slots.join(", "),
+                g.sequence.as_str()
+            ),
+        ] {
+            assert!(t.contains(&needle), "seed {seed}: no `{needle}` in\n{t}");
+        }
+        assert_eq!(g.suites.len(), SuiteKind::ALL.len());
+        for kind in SuiteKind::ALL {
+            let s = g.suite(kind);
+            assert_eq!(s.name, suite_name(seed, kind));
+            assert!(
+                t.contains(&format!("\nscenarios {} for {} {{\n", s.name, g.inventory)),
+                "seed {seed}: no suite {}",
+                s.name
+            );
+        }
+        assert_eq!(
+            g.suite_names(),
+            [
+                "case1_n", "case1_n1", "case1_n2", "case2", "missing", "untaught"
+            ]
+            .map(|k| format!("gen_{seed}_{k}"))
+        );
+    }
+}
+
+#[test]
+fn the_suites_measure_what_they_say() {
+    for seed in SEEDS {
+        let g = family_cell(seed);
+        let c = compile(&g);
+        let cell = &c.model.cells[0];
+        let slot = |name: &String| {
+            cell.slots
+                .iter()
+                .position(|s| &s.name == name)
+                .expect("slot")
+        };
+        let untaught: Vec<usize> = g.untaught_slots.iter().map(slot).collect();
+        assert!(matches!(untaught.len(), 1 | 2), "seed {seed}");
+        assert_eq!(g.taught_slots.len() + g.untaught_slots.len(), g.slots.len());
+        // The demonstrations never use an untaught slot ...
+        for d in &c.expanded.demonstrations {
+            assert!(
+                d.setup
+                    .assignment
+                    .iter()
+                    .all(|(_, s)| !untaught.contains(s)),
+                "seed {seed}: a demonstration uses an untaught slot"
+            );
+        }
+        let n = g.taught_n;
+        for suite in &c.expanded.suites {
+            let kind = SuiteKind::ALL
+                .into_iter()
+                .find(|k| suite_name(seed, *k) == suite.name)
+                .expect("a generated suite");
+            assert_eq!(suite.cases.len(), 50);
+            for case in &suite.cases {
+                let s = &case.setup;
+                let selected = s.assignment.len();
+                match kind {
+                    SuiteKind::Case1N => assert_eq!(selected, n),
+                    SuiteKind::Case1N1 => assert_eq!(selected, n + 1),
+                    SuiteKind::Case1N2 => assert_eq!(selected, n + 2),
+                    SuiteKind::Case2 => {
+                        assert_eq!(selected, n + 1);
+                        assert!((1..=n).contains(&s.human_packed.len()));
+                    }
+                    SuiteKind::Missing => {
+                        assert_eq!(selected, n + 1);
+                        assert!((1..=2).contains(&s.missing.len()));
+                    }
+                    // ... and every untaught-slot scenario uses one.
+                    SuiteKind::Untaught => {
+                        assert_eq!(selected, n);
+                        assert!(
+                            s.assignment.iter().any(|(_, sl)| untaught.contains(sl)),
+                            "seed {seed}: {} uses no untaught slot",
+                            case.name
+                        );
+                    }
+                }
+                if !matches!(kind, SuiteKind::Case2) {
+                    assert!(s.human_packed.is_empty());
+                }
+                if !matches!(kind, SuiteKind::Missing) {
+                    assert!(s.missing.is_empty());
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_family_covers_every_box_side_and_a_riser() {
+    let cells: Vec<Generated> = SEEDS.map(family_cell).collect();
+    for side in Side::ALL {
+        assert!(
+            cells.iter().any(|g| g.box_side == side),
+            "no box {}",
+            side.as_str()
+        );
+    }
+    assert!(cells.iter().all(|g| g.pending_side != g.box_side));
+    assert!(cells.iter().any(|g| g.riser()), "no riser");
+    assert!(cells.iter().any(|g| !g.riser()), "no cell on the table");
+    for opposite in [
+        (Side::Front, Side::Behind),
+        (Side::Behind, Side::Front),
+        (Side::Left, Side::Right),
+        (Side::Right, Side::Left),
+    ] {
+        if cells
+            .iter()
+            .any(|g| (g.box_side, g.pending_side) == opposite)
+        {
+            return;
+        }
+    }
+    panic!("no cell with the box opposite the products");
+}
+
+#[test]
+fn the_command_writes_one_file_per_seed() {
+    let dir = scratch("generate", "cli").join("cells");
+    let out = dir.display().to_string();
+    let run = packwright(&["generate", "--seed", "5", "--count", "3", "-o", &out]);
+    assert_eq!(
+        run.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let printed: Vec<String> = String::from_utf8_lossy(&run.stdout)
+        .lines()
+        .map(str::to_owned)
+        .collect();
+    let expected: Vec<String> = (5..8)
+        .map(|s| dir.join(format!("gen_{s}.pack")).display().to_string())
+        .collect();
+    assert_eq!(printed, expected);
+    for (seed, path) in (5..8).zip(&expected) {
+        assert_eq!(
+            fs::read_to_string(path).expect("written"),
+            family_cell(seed).text
+        );
+    }
+    let mut args = vec!["check"];
+    args.extend(expected.iter().map(String::as_str));
+    let checked = packwright(&args);
+    assert_eq!(
+        checked.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&checked.stderr)
+    );
+    let mut args = vec!["fmt", "--check"];
+    args.extend(expected.iter().map(String::as_str));
+    assert_eq!(packwright(&args).status.code(), Some(0));
+    // Again into the same directory: the files are replaced, no temporary
+    // file is left behind.
+    let again = packwright(&["generate", "--seed", "5", "-o", &out]);
+    assert_eq!(again.status.code(), Some(0));
+    let names: BTreeSet<String> = fs::read_dir(&dir)
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names,
+        ["gen_5.pack", "gen_6.pack", "gen_7.pack"]
+            .map(str::to_owned)
+            .into()
+    );
+    // Bad usage exits 2.
+    let file = dir.join("gen_5.pack").display().to_string();
+    assert_eq!(
+        packwright(&["generate", "--seed", "1", "-o", &file])
+            .status
+            .code(),
+        Some(2)
+    );
+    assert_eq!(
+        packwright(&["generate", "--seed", "1", "--count", "0", "-o", &out])
+            .status
+            .code(),
+        Some(2)
+    );
+    let _ = fs::remove_dir_all(dir.parent().expect("scratch"));
+}
