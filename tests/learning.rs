@@ -38,11 +38,24 @@ fn train_writes_a_model_that_execute_loads() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("no demonstration block `nope`"));
     assert!(!Path::new(&model).exists());
 
+    // The two demonstrations handle their products in opposite orders:
+    // no sequence rule to learn, exit 2, nothing written.
+    let out = packwright(&["train", &compiled, "-o", &model, "--quiet"]);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("follow no one sequence rule") && stderr.contains("pine_duo_seen"),
+        "{stderr}"
+    );
+    assert!(!Path::new(&model).exists());
+
     let out = packwright(&[
         "train",
         &compiled,
         "-o",
         &model,
+        "--demos",
+        "pine_seen",
         "--epochs",
         "5",
         "--dagger-rounds",
@@ -52,14 +65,22 @@ fn train_writes_a_model_that_execute_loads() {
     ]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
-    assert_eq!(report["schema"], "packwright.metrics/1");
-    assert_eq!(report["cell"], "line2");
-    assert_eq!(report["demonstrations"], 2);
-    assert_eq!(report["replayed"], 2);
-    // pine_trio's demo handles 3 products, pine_duo's 2: 5 × 2 stages × 3
-    // sub-goals, 20 actions each.
-    assert_eq!(report["samples"]["subgoals"], 30);
-    assert_eq!(report["samples"]["actions"], 600);
+    assert_eq!(report["schema"], "packwright.metrics/2");
+    assert_eq!(report["cells"], serde_json::json!(["line2"]));
+    assert_eq!(report["sequence"], "ascending");
+    // Five epochs do not converge: said.
+    let warnings = report["warnings"].as_array().expect("warnings");
+    assert!(
+        warnings.iter().any(|w| w["kind"] == "not_converged"),
+        "{warnings:?}"
+    );
+    assert_eq!(report["demonstrations"], 1);
+    assert_eq!(report["replayed"], 1);
+    // pine_trio's demo handles 3 products: 3 × 2 stages × 3 sub-goals, 20
+    // actions each; 3 × 2 reasoner decisions.
+    assert_eq!(report["samples"]["graphs"], 6);
+    assert_eq!(report["samples"]["subgoals"], 18);
+    assert_eq!(report["samples"]["actions"], 360);
     assert_eq!(report["dagger"].as_array().map(Vec::len), Some(2));
     for file in [
         "config.json",
@@ -73,7 +94,8 @@ fn train_writes_a_model_that_execute_loads() {
     let config: serde_json::Value =
         serde_json::from_slice(&fs::read(Path::new(&model).join("config.json")).expect("config"))
             .expect("JSON");
-    assert_eq!(config["task"]["cell"], "line2");
+    assert_eq!(config["task"]["cells"], serde_json::json!(["line2"]));
+    assert_eq!(config["task"]["sequence"], "ascending");
     assert_eq!(config["training"]["epochs"], 5);
 
     // The model loads and packs (or fails, typed) with the learned planner.
@@ -113,7 +135,7 @@ fn eval_reports_every_planner_of_a_suite() {
     ]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
-    assert_eq!(report["schema"], "packwright.eval/1");
+    assert_eq!(report["schema"], "packwright.eval/2");
     let rows = report["rows"].as_array().expect("rows");
     let planners: Vec<&str> = rows.iter().filter_map(|r| r["planner"].as_str()).collect();
     assert_eq!(planners, ["learned", "rrt", "expert"]);
@@ -128,6 +150,9 @@ fn eval_reports_every_planner_of_a_suite() {
     assert!(rows[1]["reasoner_sr"].is_null());
     let md = fs::read_to_string(&table).expect("markdown written");
     assert_eq!(md.lines().count(), 2 + 3, "{md}");
-    assert!(md.contains("| m_case1_2of3 | learned | 3 | 1.000"), "{md}");
+    assert!(
+        md.contains("| m_case1_2of3 | line2 | learned | 3 | 1.000"),
+        "{md}"
+    );
     let _ = fs::remove_dir_all(&dir);
 }

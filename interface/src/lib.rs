@@ -26,7 +26,7 @@ pub use outcome::{
     Failure, Fallback, FallbackKind, Hit, Outcome, PlannerKind, ProductReport, Report,
     SUCCESS_RADIUS, Shortfall, Stage, Timing, Violation,
 };
-pub use policy::{Choice, Policy};
+pub use policy::{Choice, Graph, Node, Policy, SequenceRule, SubGoalQuery};
 pub use scene::{BoxSpec, CellScene, DEFAULT_MASS, Placement, ProductSpec, SlotSpec};
 pub use task::OrderTask;
 pub use world::{Body, Contact, Observation, Seen, World, WorldError};

@@ -2,8 +2,8 @@
 //! the sub-goal planner and the dynamics policy.
 //!
 //! For every sub-goal: what the sub-goal planner will observe (the feature
-//! the reasoner selects: the product's centre when picking, the box's top
-//! centre when placing; the tool tip; the label, 0 = pick or the slot's)
+//! the reasoner selects: the product's centre when picking, the slot's
+//! centre at its box's rim when placing; the product's height; the tool tip; the label, 0 = pick or the slot's)
 //! and the sub-goal reached. Along the way to it, [`SAMPLES_PER_SUBGOAL`]
 //! (delta, action) pairs: delta = sub-goal − tool tip, action = the
 //! expert's next joint step of base, shoulder and elbow towards the
@@ -19,9 +19,11 @@ pub const MAX_ACTION: f64 = 5.0 * std::f64::consts::PI / 180.0;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct SubGoalSample {
-    /// The selected feature: product centre (picking) or box top centre
-    /// (placing).
+    /// The selected feature: product centre (picking) or the slot's
+    /// centre at its box's rim (placing).
     pub feature: [f64; 3],
+    /// The handled product's height.
+    pub height: f64,
     /// The tool tip when the sub-goal is issued.
     pub tool: [f64; 3],
     /// 0 = pick, else the slot's label.

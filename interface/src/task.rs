@@ -33,15 +33,15 @@ impl OrderTask {
             .map(|&(_, s)| s)
     }
 
-    /// The top centre of the box that holds slot `s`: the feature the
+    /// Slot `s`'s centre at the height of its box's rim: the feature the
     /// placing stage's sub-goals are planned from.
-    pub fn box_top(&self, s: usize) -> [f64; 3] {
+    pub fn slot_rim(&self, s: usize) -> [f64; 3] {
         let cell = &self.cell;
         let slot = cell.slots[s].position;
-        cell.boxes
+        let rim = cell
+            .boxes
             .get(cell.slots[s].box_index)
-            .map_or([slot[0], slot[1], 0.0], |b| {
-                [b.centre[0], b.centre[1], b.size[2]]
-            })
+            .map_or(0.0, |b| b.size[2]);
+        [slot[0], slot[1], rim]
     }
 }

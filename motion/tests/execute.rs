@@ -5,11 +5,11 @@
 mod common;
 use common::bench_cell;
 
-use packwright_interface::Choice;
 use packwright_interface::OrderTask;
 use packwright_interface::Policy;
 use packwright_interface::outcome::{Outcome, Report, Shortfall, Stage, Violation};
 use packwright_interface::scene::{Placement, ProductSpec};
+use packwright_interface::{Choice, Graph, Node, SequenceRule, SubGoalQuery};
 use packwright_kinematics::Arm;
 use packwright_motion::execute::{self, Planner};
 use packwright_motion::expert;
@@ -160,31 +160,32 @@ struct Scripted {
 }
 
 impl Policy for Scripted {
-    fn reason(&self, nodes: &[[f32; 4]], goal_of: &dyn Fn(Option<usize>) -> [f32; 3]) -> Choice {
-        let height = 0.05;
+    fn reason(&self, graph: &Graph) -> Choice {
         if let Some(node) = self.wrong_pick {
             return Choice {
                 node: Some(node),
                 label: 0,
             };
         }
-        // A product more than 5 cm above where it stands is held: place it.
-        if nodes.iter().any(|n| f64::from(n[2]) > height / 2.0 + 0.05) {
-            let goal = goal_of(None);
-            let slot = self.task.cell.slots.iter().position(|s| {
-                (s.position[0] - f64::from(goal[0])).hypot(s.position[1] - f64::from(goal[1]))
-                    < 1e-3
-            });
+        // A product more than 5 cm above the table is held: place it.
+        let raised = |n: &Node| n.centre[2] - n.height / 2.0 > 0.05;
+        if graph.nodes.iter().any(raised) {
+            let goal = graph.held_goal;
+            let slot = graph
+                .slots
+                .iter()
+                .position(|s| (s[0] - goal[0]).hypot(s[1] - goal[1]) < 1e-3);
             return Choice {
                 node: None,
                 label: slot.map_or(0, |s| s + 1),
             };
         }
-        let next = (0..nodes.len()).find(|&i| {
-            let g = goal_of(Some(i));
-            let n = nodes[i];
-            let away = (0..3).map(|j| (n[j] - g[j]).powi(2)).sum::<f32>().sqrt();
-            n[3] > 0.5 && away > 0.02
+        let next = graph.nodes.iter().position(|n| {
+            let away = (0..3)
+                .map(|j| (n.centre[j] - n.goal[j]).powi(2))
+                .sum::<f32>()
+                .sqrt();
+            n.selected && away > 0.02
         });
         Choice {
             node: next,
@@ -192,20 +193,35 @@ impl Policy for Scripted {
         }
     }
 
-    fn subgoal(&self, feature: [f32; 3], tool: [f32; 3], label: usize, index: usize) -> [f32; 3] {
+    fn subgoal(&self, q: &SubGoalQuery) -> [f32; 3] {
         let f = |v: [f32; 3]| v.map(f64::from);
         let cell = &self.task.cell;
-        let goals = match label.checked_sub(1) {
-            None => expert::picking(f(feature), 0.05, cell.lift),
-            Some(s) => expert::placing(
-                f(tool),
-                cell.slots[s].position,
-                0.05,
-                expert::box_height(cell, s),
-                [cell.base[0], cell.base[1]],
-            ),
+        let goals = match q.stage {
+            Stage::Picking => expert::picking(f(q.feature), f64::from(q.height), cell.lift),
+            Stage::Placing => {
+                let s = cell
+                    .slots
+                    .iter()
+                    .position(|s| {
+                        (s.position[0] - f64::from(q.feature[0]))
+                            .hypot(s.position[1] - f64::from(q.feature[1]))
+                            < 1e-3
+                    })
+                    .unwrap_or(0);
+                expert::placing(
+                    f(q.tool),
+                    cell.slots[s].position,
+                    f64::from(q.height),
+                    expert::box_height(cell, s),
+                    [cell.base[0], cell.base[1]],
+                )
+            }
         };
-        goals[index.min(2)].tip.map(|v| v as f32)
+        goals[q.index.min(2)].tip.map(|v| v as f32)
+    }
+
+    fn sequence(&self) -> SequenceRule {
+        SequenceRule::Ascending
     }
 
     fn action(&self, _delta: [f32; 3], _joints: [f32; 3]) -> [f32; 3] {

@@ -6,6 +6,7 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use packwright_interface::{Graph, Node, Stage, SubGoalQuery};
 use packwright_nets::FILES;
 use packwright_nets::Networks;
 
@@ -21,22 +22,34 @@ fn bundled() -> Networks {
     .expect("the bundled model loads")
 }
 
+/// A graph of `m` products, every other one selected, none packed.
+fn graph(m: usize) -> Graph {
+    Graph {
+        nodes: (0..m)
+            .map(|i| Node {
+                centre: [0.4 + 0.05 * i as f32, -0.4, 0.03],
+                height: 0.06,
+                selected: i % 2 == 0,
+                goal: [0.1, 0.62, 0.03],
+            })
+            .collect(),
+        slots: (0..5).map(|i| [0.1 * i as f32 - 0.2, 0.62, 0.0]).collect(),
+        held_goal: [0.0; 3],
+    }
+}
+
 fn learning(c: &mut Criterion) {
     let nets = bundled();
     for m in [3usize, 5, 20] {
-        let nodes: Vec<[f32; 4]> = (0..m)
-            .map(|i| [0.4 + 0.05 * i as f32, -0.4, 0.03, (i % 2) as f32])
-            .collect();
+        let g = graph(m);
         c.bench_function(&format!("reasoner_decision_{m}_products"), |b| {
-            b.iter(|| nets.reason(black_box(&nodes), |_| [0.1, 0.62, 0.13]))
+            b.iter(|| nets.reason(black_box(&g)))
         });
     }
     // Cold caches, as inside a run: the simulator works between two
     // decisions. 8 MiB written before each call evicts L1 and L2.
     let mut sweep = vec![0u8; 8 << 20];
-    let nodes: Vec<[f32; 4]> = (0..5)
-        .map(|i| [0.4 + 0.05 * i as f32, -0.4, 0.03, (i % 2) as f32])
-        .collect();
+    let g = graph(5);
     c.bench_function("reasoner_decision_5_products_cold_cache", |b| {
         b.iter_batched(
             || {
@@ -45,12 +58,20 @@ fn learning(c: &mut Criterion) {
                 }
                 black_box(sweep[sweep.len() / 2])
             },
-            |_| nets.reason(black_box(&nodes), |_| [0.1, 0.62, 0.13]),
+            |_| nets.reason(black_box(&g)),
             BatchSize::PerIteration,
         )
     });
+    let query = SubGoalQuery {
+        stage: Stage::Placing,
+        index: 1,
+        feature: [0.6, -0.4, 0.03],
+        tool: [0.1, 0.6, 0.4],
+        height: 0.06,
+        base: [0.0; 3],
+    };
     c.bench_function("subgoal_planner", |b| {
-        b.iter(|| nets.subgoal(black_box([0.6, -0.4, 0.03]), [0.1, 0.6, 0.4], 0, 1))
+        b.iter(|| nets.subgoal(black_box(&query)))
     });
     c.bench_function("dynamics_action", |b| {
         b.iter(|| nets.action(black_box([0.1, -0.2, 0.05]), [1.0, -1.4, 2.0]))

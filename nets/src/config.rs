@@ -1,20 +1,19 @@
 //! What a model directory's `config.json` says: the architecture, how it
 //! was trained, and what it was taught.
 
+use packwright_interface::SequenceRule;
 use serde::{Deserialize, Serialize};
 
 /// The architecture: everything needed to rebuild the modules before their
 /// weights are loaded. Saved as `config.json` beside the weights.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ModelConfig {
-    /// Number of labels: `pick` plus one per slot.
-    pub labels: usize,
     /// Width of the GraphSAGE embeddings.
     pub graph_hidden: usize,
     /// Number of GraphSAGE layers.
     pub graph_layers: usize,
-    /// Width of the label classifier's hidden layers.
-    pub classifier_hidden: usize,
+    /// Width of the slot pointer's hidden layers.
+    pub pointer_hidden: usize,
     /// Width of the sub-goal planner's hidden layers.
     pub subgoal_hidden: usize,
     /// Size of the sub-goal planner's latent variable.
@@ -23,13 +22,18 @@ pub struct ModelConfig {
     pub dynamics_hidden: usize,
 }
 
+impl Default for ModelConfig {
+    fn default() -> ModelConfig {
+        ModelConfig::new()
+    }
+}
+
 impl ModelConfig {
-    pub fn new(labels: usize) -> ModelConfig {
+    pub fn new() -> ModelConfig {
         ModelConfig {
-            labels,
             graph_hidden: 32,
             graph_layers: 3,
-            classifier_hidden: 32,
+            pointer_hidden: 16,
             subgoal_hidden: 64,
             subgoal_latent: 4,
             dynamics_hidden: 64,
@@ -41,13 +45,16 @@ impl ModelConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrainConfig {
     pub seed: u64,
-    /// Most epochs per network.
+    /// Most epochs per network; a network still improving at the last
+    /// one gets up to as many again (and is reported as not converged if
+    /// it still improves).
     pub epochs: usize,
-    /// Most mini-batches per epoch: a large sample set is visited over
-    /// several epochs (one shuffled pass after another), so that every
-    /// network gets a similar number of optimiser steps.
+    /// Mini-batches per epoch, whatever the number of samples: a large
+    /// set is visited over several epochs, a small one several times per
+    /// epoch, so the optimiser's budget does not shrink with the data.
     pub batches_per_epoch: usize,
-    /// Stop after this many epochs without a better held-out loss.
+    /// Stop after this many epochs without a better held-out loss (a
+    /// plateau).
     pub patience: usize,
     /// Adam's learning rate at the start; it decays exponentially to a
     /// tenth of it at the last epoch.
@@ -59,11 +66,6 @@ pub struct TrainConfig {
     pub action_batch: usize,
     /// Weight of the sub-goal planner's KL term.
     pub kl_weight: f64,
-    /// Standard deviation (m) of the noise added to the products'
-    /// positions while the reasoner trains (sensing noise, a held product
-    /// a little lower than demonstrated).
-    #[serde(default)]
-    pub position_noise: f64,
     /// DAgger rounds for the dynamics policy (with a coach): roll the
     /// policy out from the demonstrated starts, label the states it
     /// visits with the expert's action, train on everything so far.
@@ -87,20 +89,23 @@ impl Default for TrainConfig {
             subgoal_batch: 64,
             action_batch: 256,
             kl_weight: 1e-3,
-            position_noise: 0.0,
             dagger_rounds: 2,
             dagger_epochs: 60,
         }
     }
 }
 
-/// What the model was taught on, for the runtime to check an order against.
+/// What the model was taught. A model answers about any cell (its
+/// inputs are relative: see `features`); what it needs to know of a cell
+/// it was not taught comes from the `.pack` files at run time (the base,
+/// the slots and their box, the products' sizes and the order's goals).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Task {
-    /// The cell of the demonstrations.
-    pub cell: String,
-    /// Label names: `pick`, then the cell's slots in order.
-    pub labels: Vec<String>,
+    /// The cells of the demonstrations.
+    pub cells: Vec<String>,
+    /// The sequence rule the demonstrations follow (inferred by `train`);
+    /// the reasoner's chain order, and what `eval` judges it against.
+    pub sequence: SequenceRule,
     /// The demonstration blocks taught.
     pub demos: Vec<String>,
 }
@@ -115,7 +120,7 @@ pub struct SavedConfig {
 }
 
 /// The schema `config.json` declares.
-pub const SCHEMA: &str = "packwright.model/1";
+pub const SCHEMA: &str = "packwright.model/2";
 
 /// The files of a model directory.
 pub const FILES: [&str; 4] = [

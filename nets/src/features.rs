@@ -1,40 +1,65 @@
-//! What the networks read: the training examples (plain numbers) and the
-//! input encodings shared by training and run time.
+//! What the networks read: the training examples, and the input encodings
+//! that training and run time share.
+//!
+//! Every encoding is in terms that mean the same in any cell, so that one
+//! set of weights serves cells it was not taught (README, "Learning"):
+//!
+//! - a **node** (a product) is (selected, place along the taught chain,
+//!   distance from its goal, height of its bottom over the table), never
+//!   its position;
+//! - a **slot** is where it lies relative to the held product's goal, so
+//!   the placing decision points at a slot by its geometry: any slot of any
+//!   cell, demonstrated or not;
+//! - a **sub-goal** is in cylindrical coordinates about the robot base's
+//!   vertical axis, relative to the feature (the product, or the slot at
+//!   its box's rim), with the turn from the cup tip to the feature as an
+//!   input: the expert's
+//!   approach point, half-way round between the pick and place azimuths,
+//!   is then one smooth function of the inputs whichever side the box is
+//!   on (in Cartesian coordinates the two ways round a box behind the
+//!   robot average to a point inside the base);
+//! - an **action** sees the sub-goal's direction in the frame that turns
+//!   with the base joint, and the shoulder and elbow, not the base angle:
+//!   the arm's motion is the same wherever it points.
+
+use packwright_interface::{Graph, Stage, SubGoalQuery};
 
 /// Scale of the dynamics policy's outputs: actions are learnt as fractions
 /// of the largest joint step (5 degrees).
 pub const ACTION_SCALE: f32 = packwright_interface::record::MAX_ACTION as f32;
 
-/// Inputs per node: (x, y, z, I) and the node's place along the chain,
-/// 0 for the first present product to 1 for the last.
-pub const NODE_FEATURES: usize = 5;
+/// Inputs per node: selected (0/1), place along the chain (0 for the first
+/// product seen to 1 for the last), distance from its goal (decimetres,
+/// at most 3), height of its bottom over the table (decimetres, 0 to 3).
+pub const NODE_FEATURES: usize = 4;
+/// Inputs per slot: (dx, dy) from the held product's goal to the slot, and
+/// their length (decimetres).
+pub const SLOT_FEATURES: usize = 3;
+/// The sub-goal planner's inputs ([`subgoal_input`]).
+pub const SUBGOAL_INPUTS: usize = 11;
+/// The dynamics policy's inputs ([`action_input`]).
+pub const ACTION_INPUTS: usize = 5;
+/// Metres per radian of sub-goal azimuth in the planner's outputs: a
+/// typical reach, so that an azimuth error weighs like the distance it
+/// moves the cup.
+pub const ARC_SCALE: f32 = 0.7;
 
-/// One reasoner decision: the graph of the present products at the start of
-/// a stage and what the demonstrator did.
+/// One reasoner decision: the graph at the start of a stage and what the
+/// demonstrator did.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GraphExample {
-    /// (x, y, z, I) of each present product, in inventory order.
-    pub nodes: Vec<[f32; 4]>,
-    /// The handled product's goal position.
-    pub goal: [f32; 3],
-    /// The chosen node, or `nodes.len()` for the box.
+    pub graph: Graph,
+    /// The chosen node, or `graph.nodes.len()` for the box.
     pub target: usize,
-    /// 0 = pick, k = the k-th slot of the cell.
-    pub label: usize,
+    /// Placing: the chosen slot (index into `graph.slots`).
+    pub slot: Option<usize>,
 }
 
 /// One sub-goal issued by the demonstrator.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SubGoalExample {
-    /// The selected feature: product centre (picking) or box top centre
-    /// (placing).
-    pub feature: [f32; 3],
-    /// The tool tip when the sub-goal was issued.
-    pub tool: [f32; 3],
-    pub label: usize,
-    /// 0, 1, 2: which of the stage's three sub-goals.
-    pub index: usize,
-    /// The tool tip reached.
+    pub query: SubGoalQuery,
+    /// The cup tip reached.
     pub target: [f32; 3],
 }
 
@@ -55,31 +80,176 @@ pub struct TrainingSet {
     pub graphs: Vec<GraphExample>,
     pub subgoals: Vec<SubGoalExample>,
     pub actions: Vec<ActionExample>,
-    /// Number of labels: `pick` plus the cell's slots.
-    pub labels: usize,
 }
 
-/// The sub-goal planner's input row: feature, tool − feature, one-hot
-/// label, one-hot sub-goal index.
-pub fn subgoal_input(
-    out: &mut Vec<f32>,
-    feature: [f32; 3],
-    tool: [f32; 3],
-    label: usize,
-    index: usize,
-    labels: usize,
-) {
-    out.extend(feature);
-    out.extend((0..3).map(|j| tool[j] - feature[j]));
-    one_hot(out, label, labels);
-    one_hot(out, index, 3);
+fn norm2(v: [f32; 2]) -> f32 {
+    (v[0] * v[0] + v[1] * v[1]).sqrt()
 }
 
-pub fn subgoal_width(labels: usize) -> usize {
-    6 + labels + 3
+fn distance(a: [f32; 3], b: [f32; 3]) -> f32 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// The nodes' input rows, in chain order.
+pub fn node_rows(graph: &Graph) -> Vec<[f32; NODE_FEATURES]> {
+    let last = graph.nodes.len().saturating_sub(1).max(1) as f32;
+    graph
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(i, n)| {
+            let away = if n.selected {
+                distance(n.centre, n.goal)
+            } else {
+                0.0
+            };
+            let bottom = n.centre[2] - n.height / 2.0;
+            [
+                if n.selected { 1.0 } else { 0.0 },
+                i as f32 / last,
+                (10.0 * away).clamp(0.0, 3.0),
+                (10.0 * bottom).clamp(0.0, 3.0),
+            ]
+        })
+        .collect()
+}
+
+/// The slots' input rows, in the cell's slot order.
+pub fn slot_rows(graph: &Graph) -> Vec<[f32; SLOT_FEATURES]> {
+    let g = graph.held_goal;
+    graph
+        .slots
+        .iter()
+        .map(|s| {
+            let d = [10.0 * (s[0] - g[0]), 10.0 * (s[1] - g[1])];
+            [d[0], d[1], norm2(d)]
+        })
+        .collect()
+}
+
+/// `a` in (-pi, pi].
+fn wrap(mut a: f32) -> f32 {
+    use std::f32::consts::{PI, TAU};
+    while a > PI {
+        a -= TAU;
+    }
+    while a <= -PI {
+        a += TAU;
+    }
+    a
+}
+
+/// (radius, azimuth) of `p` about the vertical axis through `base`.
+fn polar(p: [f32; 3], base: [f32; 3]) -> (f32, f32) {
+    let (dx, dy) = (p[0] - base[0], p[1] - base[1]);
+    (dx.hypot(dy), dy.atan2(dx))
+}
+
+/// The sub-goal planner's input row: the feature's radius and height, the
+/// cup tip's, the turn from the tip's azimuth to the feature's (the
+/// shorter way), the product's height (decimetres), the stage and the
+/// sub-goal index one-hot.
+pub fn subgoal_input(q: &SubGoalQuery) -> [f32; SUBGOAL_INPUTS] {
+    let (rf, af) = polar(q.feature, q.base);
+    let (rt, at) = polar(q.tool, q.base);
+    let stage = match q.stage {
+        Stage::Picking => 0,
+        Stage::Placing => 1,
+    };
+    let mut x = [0.0; SUBGOAL_INPUTS];
+    x[..6].copy_from_slice(&[
+        rf,
+        q.feature[2],
+        rt,
+        q.tool[2],
+        wrap(af - at),
+        10.0 * q.height,
+    ]);
+    x[6 + stage] = 1.0;
+    x[8 + q.index.min(2)] = 1.0;
+    x
+}
+
+/// The planner's target for `target`, relative to the feature: its
+/// radius and height minus the feature's, and its azimuth from the
+/// feature's (times [`ARC_SCALE`]). Above a product or a slot these are
+/// constants; the approach point's are half the cup tip's offsets.
+pub fn subgoal_output(q: &SubGoalQuery, target: [f32; 3]) -> [f32; 3] {
+    let (r, a) = polar(target, q.base);
+    let (rf, af) = polar(q.feature, q.base);
+    [r - rf, target[2] - q.feature[2], ARC_SCALE * wrap(a - af)]
+}
+
+/// The cup-tip position an output of the planner stands for.
+pub fn subgoal_position(q: &SubGoalQuery, out: [f32; 3]) -> [f32; 3] {
+    let (rf, af) = polar(q.feature, q.base);
+    let (r, a) = (rf + out[0], af + out[2] / ARC_SCALE);
+    [
+        q.base[0] + r * a.cos(),
+        q.base[1] + r * a.sin(),
+        q.feature[2] + out[1],
+    ]
+}
+
+/// The dynamics policy's input row: delta turned into the frame of the
+/// base joint (so the base angle itself is not an input), then the
+/// shoulder and elbow.
+pub fn action_input(delta: [f32; 3], joints: [f32; 3]) -> [f32; ACTION_INPUTS] {
+    let (s, c) = joints[0].sin_cos();
+    [
+        c * delta[0] + s * delta[1],
+        -s * delta[0] + c * delta[1],
+        delta[2],
+        joints[1],
+        joints[2],
+    ]
 }
 
 /// Appends a one-hot row of `n` with a 1 at `k` (none when `k >= n`).
 pub fn one_hot(out: &mut Vec<f32>, k: usize, n: usize) {
     out.extend((0..n).map(|i| if i == k { 1.0 } else { 0.0 }));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sub_goal_outputs_round_trip() {
+        for base in [[0.0, 0.0, 0.0], [0.2, -0.1, 0.3]] {
+            for stage in [Stage::Picking, Stage::Placing] {
+                let q = SubGoalQuery {
+                    stage,
+                    index: 1,
+                    feature: [-0.5, 0.1, 0.08],
+                    tool: [0.6, -0.3, 0.2],
+                    height: 0.05,
+                    base,
+                };
+                let target = [-0.2, -0.45, 0.2];
+                let back = subgoal_position(&q, subgoal_output(&q, target));
+                for j in 0..3 {
+                    assert!((back[j] - target[j]).abs() < 1e-5, "{back:?}");
+                }
+            }
+        }
+    }
+
+    /// Turning the whole arm (base joint and delta together) leaves the
+    /// action input unchanged.
+    #[test]
+    fn action_inputs_turn_with_the_base() {
+        let delta = [0.1f32, -0.05, 0.02];
+        let a = action_input(delta, [0.3, -1.2, 1.5]);
+        let t = 1.1f32;
+        let turned = [
+            t.cos() * delta[0] - t.sin() * delta[1],
+            t.sin() * delta[0] + t.cos() * delta[1],
+            delta[2],
+        ];
+        let b = action_input(turned, [0.3 + t, -1.2, 1.5]);
+        for j in 0..ACTION_INPUTS {
+            assert!((a[j] - b[j]).abs() < 1e-5);
+        }
+    }
 }

@@ -14,7 +14,7 @@
 //! after a ReLU about half are (`cargo bench -p packwright-nets --bench
 //! learning` measures these passes).
 
-use crate::features::NODE_FEATURES;
+use crate::features::{ACTION_INPUTS, NODE_FEATURES, SLOT_FEATURES, action_input};
 
 /// A dense layer: `y = W x + b`.
 #[derive(Debug, Clone)]
@@ -157,19 +157,19 @@ pub struct ReasonerWeights {
     pub node_score: Dense,
     pub box_hidden: Dense,
     pub box_score: Dense,
-    pub classifier: Vec<Dense>,
+    /// The slot pointer: a score per slot from its row.
+    pub pointer: Vec<Dense>,
 }
 
 impl ReasonerWeights {
-    /// Node and box logits for one graph of present products, (x, y, z,
-    /// I) in inventory order; the box last. The same inputs as training's
-    /// (`data::graph_inputs`): the place along the chain is added, and a
-    /// node's neighbours are the chain's.
+    /// Node and box logits for one graph's node rows
+    /// ([`node_rows`](crate::features::node_rows)); the box last. A node's
+    /// neighbours are the chain's.
     ///
     /// Works in one cache-aligned scratch on the stack: inside a run the
     /// allocator is as cold as the weights, and a fresh heap block can
     /// cost page faults.
-    pub fn scores(&self, nodes: &[[f32; 4]]) -> Vec<f32> {
+    pub fn scores(&self, nodes: &[[f32; NODE_FEATURES]]) -> Vec<f32> {
         let m = nodes.len();
         let width = self
             .layers
@@ -193,12 +193,9 @@ impl ReasonerWeights {
             let (out, rest) = rest.split_at_mut(m * width);
             let (neighbours, rest) = rest.split_at_mut(m * width);
             let (pooled, hidden) = rest.split_at_mut(width);
-            // The node inputs as rows: (x, y, z, I, place along the chain).
-            let last = m.saturating_sub(1).max(1) as f32;
             let x = &mut x[..m * NODE_FEATURES];
-            for (i, (row, node)) in x.chunks_exact_mut(NODE_FEATURES).zip(nodes).enumerate() {
-                row[..4].copy_from_slice(node);
-                row[4] = i as f32 / last;
+            for (row, node) in x.chunks_exact_mut(NODE_FEATURES).zip(nodes) {
+                row.copy_from_slice(node);
             }
             h[..x.len()].copy_from_slice(x);
             let mut w = NODE_FEATURES;
@@ -264,22 +261,18 @@ impl ReasonerWeights {
         argmax(scores.iter().copied())
     }
 
-    /// Label logits from the scores and the handled product's goal.
-    pub fn labels(&self, scores: &[f32], goal: [f32; 3]) -> Vec<f32> {
-        let top = scores.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-        let exp: Vec<f32> = scores.iter().map(|s| (s - top).exp()).collect();
-        let sum: f32 = exp.iter().sum();
-        let boxed = exp.last().copied().unwrap_or(0.0) / sum;
-        let node = exp[..exp.len().saturating_sub(1)]
+    /// The slot pointer's logits, one per slot row
+    /// ([`slot_rows`](crate::features::slot_rows)).
+    pub fn slot_scores(&self, slots: &[[f32; SLOT_FEATURES]]) -> Vec<f32> {
+        slots
             .iter()
-            .copied()
-            .fold(f32::NEG_INFINITY, f32::max)
-            / sum;
-        relu_mlp(&self.classifier, &[boxed, node, goal[0], goal[1], goal[2]])
+            .map(|row| relu_mlp(&self.pointer, row).first().copied().unwrap_or(0.0))
+            .collect()
     }
 
-    pub fn label(&self, scores: &[f32], goal: [f32; 3]) -> usize {
-        argmax(self.labels(scores, goal).into_iter())
+    /// The best slot (`None` when there are none).
+    pub fn slot(&self, slots: &[[f32; SLOT_FEATURES]]) -> Option<usize> {
+        (!slots.is_empty()).then(|| argmax(self.slot_scores(slots).into_iter()))
     }
 }
 
@@ -312,13 +305,15 @@ pub struct DynamicsWeights {
 }
 
 impl DynamicsWeights {
-    /// Fractions of the largest step for (delta, joints), minus the output
-    /// at delta 0.
+    /// Fractions of the largest step for (delta, joints)
+    /// ([`action_input`]), minus the output at delta 0.
     pub fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
-        let [a, b, c] = delta;
-        let [d, e, f] = joints;
-        let moved = relu_mlp(&self.layers, &[a, b, c, d, e, f]);
-        let still = relu_mlp(&self.layers, &[0.0, 0.0, 0.0, d, e, f]);
+        let x = action_input(delta, joints);
+        let mut zero = x;
+        zero[..3].fill(0.0);
+        debug_assert_eq!(x.len(), ACTION_INPUTS);
+        let moved = relu_mlp(&self.layers, &x);
+        let still = relu_mlp(&self.layers, &zero);
         std::array::from_fn(|j| {
             moved.get(j).copied().unwrap_or(0.0) - still.get(j).copied().unwrap_or(0.0)
         })

@@ -7,9 +7,12 @@
 
 use crate::config::{ModelConfig, SCHEMA, SavedConfig, Task, TrainConfig};
 use crate::error::ModelError;
-use crate::features::{ACTION_SCALE, NODE_FEATURES, subgoal_input, subgoal_width};
+use crate::features::{
+    ACTION_INPUTS, ACTION_SCALE, NODE_FEATURES, SLOT_FEATURES, SUBGOAL_INPUTS, node_rows,
+    slot_rows, subgoal_input, subgoal_position,
+};
 use crate::forward::{Dense, DynamicsWeights, ReasonerWeights, SageWeights, SubGoalWeights};
-use packwright_interface::{Choice, Policy};
+use packwright_interface::{Choice, Graph, Node, Policy, SequenceRule, Stage, SubGoalQuery};
 use safetensors::{Dtype, SafeTensors};
 
 /// The three networks' run-time weights.
@@ -143,9 +146,8 @@ impl Networks {
         }
         let c = &saved.model;
         let widths = [
-            c.labels,
             c.graph_hidden,
-            c.classifier_hidden,
+            c.pointer_hidden,
             c.subgoal_hidden,
             c.subgoal_latent,
             c.dynamics_hidden,
@@ -153,7 +155,7 @@ impl Networks {
         if widths.iter().any(|&w| w == 0 || w > 4096) || !(1..=64).contains(&c.graph_layers) {
             return Err(ModelError::Architecture);
         }
-        let (h, k) = (c.graph_hidden, c.classifier_hidden);
+        let (h, k) = (c.graph_hidden, c.pointer_hidden);
         let r = open("reasoner.safetensors", reasoner)?;
         let layers = (0..c.graph_layers)
             .map(|i| {
@@ -170,12 +172,12 @@ impl Networks {
             node_score: r.dense("node_score", h, 1)?,
             box_hidden: r.dense("box_hidden", h + NODE_FEATURES, h)?,
             box_score: r.dense("box_score", h, 1)?,
-            classifier: denses(&r, "classifier", &[(5, k), (k, k), (k, c.labels)])?,
+            pointer: denses(&r, "pointer", &[(SLOT_FEATURES, k), (k, k), (k, 1)])?,
         };
         let (h, z) = (c.subgoal_hidden, c.subgoal_latent);
         let s = open("subgoal.safetensors", subgoal)?;
         let subgoal = SubGoalWeights {
-            hidden: denses(&s, "hidden", &[(subgoal_width(c.labels), h), (h, h)])?,
+            hidden: denses(&s, "hidden", &[(SUBGOAL_INPUTS, h), (h, h)])?,
             latent_mean: s.dense("latent_mean", h, z)?,
             decoder: s.dense("decoder", h + z, h)?,
             mean: s.dense("mean", h, 3)?,
@@ -183,7 +185,7 @@ impl Networks {
         let h = c.dynamics_hidden;
         let d = open("dynamics.safetensors", dynamics)?;
         let dynamics = DynamicsWeights {
-            layers: denses(&d, "layers", &[(6, h), (h, h), (h, 3)])?,
+            layers: denses(&d, "layers", &[(ACTION_INPUTS, h), (h, h), (h, 3)])?,
         };
         let networks = Networks {
             config: saved.model,
@@ -202,22 +204,39 @@ impl Networks {
     /// Checks that every network answers a typical input with finite
     /// numbers: finite weights can still overflow (weights of 1e20).
     fn probe(&self) -> Result<(), ModelError> {
-        let nodes = [
-            [0.5, -0.2, 0.025, 1.0],
-            [0.62, -0.2, 0.025, 0.0],
-            [0.0, 0.6, 0.2, 1.0],
-        ];
+        let node = |centre: [f32; 3], selected| Node {
+            centre,
+            height: 0.05,
+            selected,
+            goal: [0.0, 0.6, 0.025],
+        };
+        let graph = Graph {
+            nodes: vec![
+                node([0.5, -0.2, 0.025], true),
+                node([0.62, -0.2, 0.025], false),
+                node([0.0, 0.6, 0.2], true),
+            ],
+            slots: vec![[0.0, 0.6, 0.0], [0.1, 0.6, 0.0]],
+            held_goal: [0.0, 0.6, 0.025],
+        };
         let r = &self.weights.reasoner;
-        let scores = r.scores(&nodes);
-        let labels = r.labels(&scores, [0.0, 0.6, 0.025]);
-        if scores.iter().chain(&labels).any(|v| !v.is_finite()) {
+        let scores = r.scores(&node_rows(&graph));
+        let slots = r.slot_scores(&slot_rows(&graph));
+        if scores.iter().chain(&slots).any(|v| !v.is_finite()) {
             return Err(ModelError::NonFiniteOutput {
                 network: "reasoner",
             });
         }
-        for label in 0..self.config.labels {
+        for stage in [Stage::Picking, Stage::Placing] {
             for index in 0..3 {
-                let g = self.subgoal([0.5, -0.2, 0.025], [0.5, -0.2, 0.35], label, index);
+                let g = self.subgoal(&SubGoalQuery {
+                    stage,
+                    index,
+                    feature: [0.5, -0.2, 0.025],
+                    tool: [0.5, -0.2, 0.35],
+                    height: 0.05,
+                    base: [0.0; 3],
+                });
                 if g.iter().any(|v| !v.is_finite()) {
                     return Err(ModelError::NonFiniteOutput {
                         network: "sub-goal planner",
@@ -234,42 +253,28 @@ impl Networks {
         Ok(())
     }
 
-    /// The reasoner: which node to pick (or the box), then the label given
-    /// the handled product's goal, `goal_of(node)` (`None`: the held
-    /// product's).
-    pub fn reason(
-        &self,
-        nodes: &[[f32; 4]],
-        goal_of: impl FnOnce(Option<usize>) -> [f32; 3],
-    ) -> Choice {
+    /// The reasoner: which node to pick, or the box and the slot the
+    /// pointer chooses for the held product (label = slot + 1).
+    pub fn reason(&self, graph: &Graph) -> Choice {
         let r = &self.weights.reasoner;
-        let scores = r.scores(nodes);
+        let scores = r.scores(&node_rows(graph));
         let best = ReasonerWeights::best(&scores);
-        let node = (best < nodes.len()).then_some(best);
-        let label = r.label(&scores, goal_of(node));
-        Choice { node, label }
+        if best < graph.nodes.len() {
+            return Choice {
+                node: Some(best),
+                label: 0,
+            };
+        }
+        Choice {
+            node: None,
+            label: r.slot(&slot_rows(graph)).map_or(0, |s| s + 1),
+        }
     }
 
-    /// The sub-goal planner's mean: the next tool-tip position.
-    pub fn subgoal(
-        &self,
-        feature: [f32; 3],
-        tool: [f32; 3],
-        label: usize,
-        index: usize,
-    ) -> [f32; 3] {
-        let labels = self.config.labels;
-        let mut x = Vec::with_capacity(subgoal_width(labels));
-        subgoal_input(
-            &mut x,
-            feature,
-            tool,
-            label.min(labels - 1),
-            index.min(2),
-            labels,
-        );
-        let v = self.weights.subgoal.mean(&x);
-        std::array::from_fn(|j| feature[j] + v[j])
+    /// The sub-goal planner's mean: the next cup-tip position.
+    pub fn subgoal(&self, query: &SubGoalQuery) -> [f32; 3] {
+        let v = self.weights.subgoal.mean(&subgoal_input(query));
+        subgoal_position(query, v)
     }
 
     /// The dynamics policy: base, shoulder and elbow steps (radians) for
@@ -283,12 +288,16 @@ impl Networks {
 }
 
 impl Policy for Networks {
-    fn reason(&self, nodes: &[[f32; 4]], goal_of: &dyn Fn(Option<usize>) -> [f32; 3]) -> Choice {
-        Networks::reason(self, nodes, goal_of)
+    fn reason(&self, graph: &Graph) -> Choice {
+        Networks::reason(self, graph)
     }
 
-    fn subgoal(&self, feature: [f32; 3], tool: [f32; 3], label: usize, index: usize) -> [f32; 3] {
-        Networks::subgoal(self, feature, tool, label, index)
+    fn subgoal(&self, query: &SubGoalQuery) -> [f32; 3] {
+        Networks::subgoal(self, query)
+    }
+
+    fn sequence(&self) -> SequenceRule {
+        self.task.sequence.clone()
     }
 
     fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
@@ -336,7 +345,7 @@ mod tests {
     #[test]
     fn the_bundled_model_loads() {
         let nets = Networks::from_files(CONFIG, REASONER, SUBGOAL, DYNAMICS).expect("loads");
-        assert_eq!(nets.task.cell, "line2");
+        assert_eq!(nets.task.cells, ["line2"]);
     }
 
     /// NaN, infinite and overflowing weights are refused at load, naming

@@ -27,10 +27,11 @@ pub enum PipelineError {
     Sim(#[from] SimError),
     #[error("{what}: {source}")]
     Model { what: String, source: ModelError },
+    /// Demonstrations that follow no one sequence rule.
     #[error(
-        "the model was trained on cell `{taught}`, this order packs in cell `{cell}`: train a model on its demonstrations (`packwright train`)"
+        "the demonstrations follow no one sequence rule: {detail}. A model learns one rule (ascending, descending or a listed priority) from demonstrations that mostly agree: choose blocks that do with --demos (`sequence random` teaches none)"
     )]
-    OtherCell { taught: String, cell: String },
+    ContradictorySequence { detail: String },
     #[error("no {what} `{name}`; {known}")]
     NoSuch {
         what: &'static str,

@@ -141,6 +141,11 @@ pub struct CaseFailure {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Row {
     pub suite: String,
+    /// The suite's cell.
+    pub cell: String,
+    /// Learned only: whether the model was taught demonstrations in that
+    /// cell (`false`: it answers from the cell's geometry alone).
+    pub cell_taught: Option<bool>,
     pub planner: PlannerKind,
     pub scenarios: usize,
     /// Learned only: every reasoner decision of a scenario right.
@@ -161,8 +166,15 @@ pub struct Row {
 }
 
 impl Row {
-    /// The row of `planner` over the results of one suite.
-    pub fn of(suite: &str, planner: PlannerKind, cases: &[CaseResult]) -> Row {
+    /// The row of `planner` over the results of one suite in `cell`;
+    /// `cell_taught` for the learned planner.
+    pub fn of(
+        suite: &str,
+        cell: &str,
+        cell_taught: Option<bool>,
+        planner: PlannerKind,
+        cases: &[CaseResult],
+    ) -> Row {
         let runs: Vec<(&str, &Run)> = cases
             .iter()
             .flat_map(|c| {
@@ -195,6 +207,8 @@ impl Row {
         }
         Row {
             suite: suite.to_owned(),
+            cell: cell.to_owned(),
+            cell_taught: cell_taught.filter(|_| learned),
             planner,
             scenarios: n.max(reasoner.len()),
             reasoner_sr: Rate::of(reasoner.iter().filter(|r| **r).count(), reasoner.len()),
@@ -244,12 +258,18 @@ fn micros(s: &Spread) -> String {
 /// The Markdown table of `rows`.
 pub fn markdown(rows: &[Row]) -> String {
     let mut out = String::from(
-        "| suite | planner | n | reasoner SR | SR [95% CI] | SR no fallback | fallbacks/package | decision us (median / p99) | sub-goal us (median / p99) | sub-goal + action us (median / p99) | execution s/product |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| suite | cell | planner | n | reasoner SR | SR [95% CI] | SR no fallback | fallbacks/package | decision us (median / p99) | sub-goal us (median / p99) | sub-goal + action us (median / p99) | execution s/product |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         out.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r.suite,
+            r.cell,
+            if r.cell_taught == Some(false) {
+                " (untaught)"
+            } else {
+                ""
+            },
             r.planner,
             r.scenarios,
             rate(&r.reasoner_sr),

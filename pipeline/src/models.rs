@@ -47,7 +47,10 @@ pub fn load_model(dir: &Path) -> Result<Networks> {
 
 /// The planner to use for an order in `cell` and, for the learned one, its
 /// networks: `model` when given, else the bundled model when it was taught
-/// that cell (or when `asked` for explicitly).
+/// that cell (or when `asked` for explicitly). A model answers about any
+/// cell (its inputs are relative to the cell's geometry); whether it was
+/// taught this one is for the caller to say
+/// ([`taught`]).
 pub fn choose_planner(
     asked: Option<PlannerKind>,
     model: Option<&Path>,
@@ -57,20 +60,17 @@ pub fn choose_planner(
         (Some(PlannerKind::Expert | PlannerKind::Rrt), _) => None,
         (_, Some(dir)) => Some(load_model(dir)?),
         (Some(PlannerKind::Learned), None) => Some(default_model()?),
-        (None, None) => default_model().ok().filter(|n| n.task.cell == cell),
+        (None, None) => default_model().ok().filter(|n| taught(n, cell)),
     };
-    if let Some(n) = &nets
-        && n.task.cell != cell
-    {
-        return Err(PipelineError::OtherCell {
-            taught: n.task.cell.clone(),
-            cell: cell.to_owned(),
-        });
-    }
     let planner = match (asked, &nets) {
         (Some(p), _) => p,
         (None, Some(_)) => PlannerKind::Learned,
         (None, None) => PlannerKind::Expert,
     };
     Ok((planner, nets))
+}
+
+/// Whether `nets` was taught demonstrations in `cell`.
+pub fn taught(nets: &Networks, cell: &str) -> bool {
+    nets.task.cells.iter().any(|c| c == cell)
 }

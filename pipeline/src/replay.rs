@@ -4,6 +4,7 @@
 use crate::episode::demonstration_episode;
 use crate::error::Result;
 use packwright_compiler::artifact::{DemonstrationRecord, WorldFile};
+use packwright_interface::SubGoalQuery;
 use packwright_interface::record::MotionLog;
 use packwright_motion::execute;
 use packwright_nets::{ActionExample, SubGoalExample};
@@ -40,16 +41,24 @@ fn f32s(v: [f64; 3]) -> [f32; 3] {
     v.map(|x| x as f32)
 }
 
-/// The sub-goal planner's and the dynamics policy's examples of one log.
-pub fn motion_examples(log: &MotionLog) -> (Vec<SubGoalExample>, Vec<ActionExample>) {
+/// The sub-goal planner's and the dynamics policy's examples of one log,
+/// recorded in a cell whose robot base is at `base`.
+pub fn motion_examples(
+    log: &MotionLog,
+    base: [f64; 3],
+) -> (Vec<SubGoalExample>, Vec<ActionExample>) {
     let subgoals = log
         .subgoals
         .iter()
         .map(|s| SubGoalExample {
-            feature: f32s(s.feature),
-            tool: f32s(s.tool),
-            label: s.label as usize,
-            index: usize::from(s.index),
+            query: SubGoalQuery {
+                stage: s.stage,
+                index: usize::from(s.index),
+                feature: f32s(s.feature),
+                tool: f32s(s.tool),
+                height: s.height as f32,
+                base: f32s(base),
+            },
             target: f32s(s.target),
         })
         .collect();

@@ -1,32 +1,35 @@
 //! What a training run learns from: the demonstrations chosen from a
-//! compiled directory, their cell's labels, the reasoner's samples, and
-//! the expert's replays of them (motion demonstrations).
+//! compiled directory (in one cell or several), the sequence rule they
+//! follow, the reasoner's decisions they imply, and the expert's replays
+//! of them (motion demonstrations).
 
-use crate::artifacts::{graph_examples, read_json};
+use crate::artifacts::read_json;
 use crate::episode::{Episode, demonstration_episode};
 use crate::error::{PipelineError, Result};
 use crate::replay::{motion_examples, replay_all};
-use packwright_compiler::artifact::{DemonstrationRecord, LabelsFile, Manifest, WorldFile};
+use packwright_compiler::artifact::{DemonstrationRecord, Manifest, WorldFile};
 use packwright_interface::record::MotionLog;
-use packwright_nets::{Task, TrainingSet};
-use std::collections::BTreeSet;
+use packwright_interface::{SequenceRule, world::Seen};
+use packwright_motion::execute::demonstrated_decisions;
+use packwright_nets::{GraphExample, Task, TrainingSet};
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 use std::time::Instant;
 
 /// The chosen demonstrations of one compiled directory.
 pub struct Lesson {
     world: WorldFile,
-    graphs: Vec<u8>,
-    /// Per demonstration of `manifest.json`: chosen or not.
-    keep: Vec<bool>,
     /// The chosen demonstrations, in manifest order.
     pub chosen: Vec<DemonstrationRecord>,
-    /// The cell they are in.
-    pub cell: String,
-    /// Label names: `pick`, then the cell's slots in label order.
-    pub labels: Vec<String>,
+    /// The cells they are in, sorted.
+    pub cells: Vec<String>,
     /// The demonstration blocks chosen, sorted.
     pub blocks: Vec<String>,
+    /// The sequence rule they follow.
+    pub sequence: SequenceRule,
+    /// The chosen demonstrations (indices) that break it: their decisions
+    /// are not taught.
+    pub exceptions: Vec<usize>,
 }
 
 /// The expert's replays of a lesson's demonstrations.
@@ -59,12 +62,6 @@ impl Lesson {
     pub fn read(dir: &Path, demos: &[String]) -> Result<Lesson> {
         let manifest: Manifest = read_json(&dir.join("manifest.json"))?;
         let world: WorldFile = read_json(&dir.join("orders.json"))?;
-        let labels_file: LabelsFile = read_json(&dir.join("labels.json"))?;
-        let graphs_path = dir.join("graphs.safetensors");
-        let graphs = std::fs::read(&graphs_path).map_err(|e| PipelineError::Read {
-            path: graphs_path,
-            reason: e.to_string(),
-        })?;
         let known: BTreeSet<&str> = manifest
             .demo_blocks
             .iter()
@@ -81,66 +78,41 @@ impl Lesson {
                 ),
             });
         }
-        let keep: Vec<bool> = manifest
-            .demonstrations
-            .iter()
-            .map(|d| demos.is_empty() || demos.contains(&d.block))
-            .collect();
         let chosen: Vec<DemonstrationRecord> = manifest
             .demonstrations
             .iter()
-            .zip(&keep)
-            .filter(|(_, k)| **k)
-            .map(|(d, _)| d.clone())
+            .filter(|d| demos.is_empty() || demos.contains(&d.block))
+            .cloned()
             .collect();
-        let Some(first) = chosen.first() else {
+        if chosen.is_empty() {
             return Err(PipelineError::Selection(format!(
                 "{} holds no demonstrations to learn from: compile files with `demo` or `demos` blocks",
                 dir.display()
             )));
-        };
-        let cells: BTreeSet<&str> = chosen.iter().map(|d| d.cell.as_str()).collect();
-        if cells.len() > 1 {
-            return Err(PipelineError::Selection(format!(
-                "the demonstrations are in {} cells ({}): a model learns one cell's slots; choose blocks with --demos",
-                cells.len(),
-                cells.iter().copied().collect::<Vec<_>>().join(", ")
-            )));
         }
-        let cell = first.cell.clone();
-        let cell_labels = labels_file
-            .cells
+        let cells = chosen
             .iter()
-            .find(|c| c.cell == cell)
-            .ok_or_else(|| PipelineError::Unknown {
-                file: "labels.json",
-                what: "labels for cell",
-                name: cell.clone(),
-            })?;
-        let count = cell_labels
-            .labels
-            .iter()
-            .map(|l| l.label as usize + 1)
-            .max()
-            .unwrap_or(1);
-        let mut labels = vec![String::new(); count];
-        for l in &cell_labels.labels {
-            labels[l.label as usize] = l.name.clone();
-        }
+            .map(|d| d.cell.clone())
+            .collect::<BTreeSet<_>>()
+            .into_iter()
+            .collect();
         let blocks = chosen
             .iter()
             .map(|d| d.block.clone())
             .collect::<BTreeSet<_>>()
             .into_iter()
             .collect();
+        let Inferred {
+            rule: sequence,
+            exceptions,
+        } = sequence_rule(&world, &chosen)?;
         Ok(Lesson {
             world,
-            graphs,
-            keep,
             chosen,
-            cell,
-            labels,
+            cells,
             blocks,
+            sequence,
+            exceptions,
         })
     }
 
@@ -156,33 +128,186 @@ impl Lesson {
         })
     }
 
-    /// The three networks' examples: the reasoner's from the compiled
-    /// graphs, the others from the completed replays.
+    /// The three networks' examples: the reasoner's decisions each
+    /// demonstration implies (under the lesson's sequence rule), and the
+    /// sub-goals and actions of the completed replays.
     pub fn training_set(&self, replayed: &Replayed) -> Result<TrainingSet> {
-        let mut set = TrainingSet {
-            graphs: graph_examples(&self.graphs, &self.keep)?,
-            labels: self.labels.len(),
-            ..TrainingSet::default()
-        };
-        for log in replayed.complete() {
-            let (s, a) = motion_examples(log);
-            set.subgoals.extend(s);
-            set.actions.extend(a);
+        let mut set = TrainingSet::default();
+        for (k, (demo, log)) in self.chosen.iter().zip(&replayed.logs).enumerate() {
+            let ep = demonstration_episode(&self.world, demo)?;
+            let taught = !self.exceptions.contains(&k);
+            let seen: Vec<Seen> = ep
+                .placements
+                .iter()
+                .map(|p| Seen {
+                    name: p.product.name.clone(),
+                    centre: p.centre,
+                    yaw: 0.0,
+                })
+                .collect();
+            let sequence: Vec<usize> = ep
+                .task
+                .assignment
+                .iter()
+                .take(demo.sequence.len())
+                .map(|&(p, _)| p)
+                .collect();
+            let decisions = demonstrated_decisions(&ep.task, &seen, &sequence, &self.sequence);
+            for (graph, choice) in decisions.into_iter().filter(|_| taught) {
+                set.graphs.push(GraphExample {
+                    target: choice.node.unwrap_or(graph.nodes.len()),
+                    slot: choice.label.checked_sub(1),
+                    graph,
+                });
+            }
+            if let Some(log) = log {
+                let (s, a) = motion_examples(log, ep.task.cell.base);
+                set.subgoals.extend(s);
+                set.actions.extend(a);
+            }
         }
         Ok(set)
     }
 
-    /// The episode of the first chosen demonstration (its arm and cell).
-    pub fn first_episode(&self) -> Result<Episode> {
-        demonstration_episode(&self.world, &self.chosen[0])
+    /// The episodes of the chosen demonstrations (their arms and cells).
+    pub fn episodes(&self) -> Result<Vec<Episode>> {
+        self.chosen
+            .iter()
+            .map(|d| demonstration_episode(&self.world, d))
+            .collect()
     }
 
     /// What a model trained on this lesson was taught.
     pub fn task(&self) -> Task {
         Task {
-            cell: self.cell.clone(),
-            labels: self.labels.clone(),
+            cells: self.cells.clone(),
+            sequence: self.sequence.clone(),
             demos: self.blocks.clone(),
         }
     }
+}
+
+/// Share of the demonstrations a rule must explain to be taught.
+pub const RULE_MAJORITY: f64 = 0.8;
+
+/// The sequence rule a lesson's demonstrations follow, and the ones that
+/// do not follow it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Inferred {
+    pub rule: SequenceRule,
+    /// Indices (into the demonstrations) of those that break the rule:
+    /// reported by `train`, and their decisions left out of the reasoner's
+    /// examples.
+    pub exceptions: Vec<usize>,
+}
+
+/// Whether `sequence` (product names) follows `rule` in `inventory`
+/// (product names in listed order).
+fn follows(rule: &SequenceRule, inventory: &[&str], sequence: &[String]) -> bool {
+    let chain = rule.chain(inventory);
+    let place = |name: &str| {
+        chain
+            .iter()
+            .position(|&i| inventory[i] == name)
+            .unwrap_or(usize::MAX)
+    };
+    sequence.windows(2).all(|w| place(&w[0]) < place(&w[1]))
+}
+
+/// The sequence rule `demos` follow: ascending or descending inventory
+/// order, or a priority list of product names (the order the most
+/// demonstrations agree on pairwise; products never ordered against each
+/// other keep their first inventory's order). The rule that explains the
+/// most demonstrations wins (ascending, then descending, on a tie); it
+/// must explain at least [`RULE_MAJORITY`] of them, else the
+/// demonstrations teach no rule and this is an error.
+pub fn sequence_rule(world: &WorldFile, demos: &[DemonstrationRecord]) -> Result<Inferred> {
+    let mut inventories: Vec<Vec<&str>> = Vec::new();
+    let mut names: Vec<&str> = Vec::new();
+    let mut votes: BTreeMap<(&str, &str), usize> = BTreeMap::new();
+    for d in demos {
+        let inventory = world
+            .inventories
+            .iter()
+            .find(|i| i.name == d.inventory)
+            .ok_or_else(|| PipelineError::Unknown {
+                file: "orders.json",
+                what: "inventory",
+                name: d.inventory.clone(),
+            })?;
+        let listed: Vec<&str> = inventory
+            .products
+            .iter()
+            .map(|p| p.product.as_str())
+            .collect();
+        for &n in &listed {
+            if !names.contains(&n) {
+                names.push(n);
+            }
+        }
+        inventories.push(listed);
+        for (i, a) in d.sequence.iter().enumerate() {
+            for b in &d.sequence[i + 1..] {
+                *votes.entry((a.as_str(), b.as_str())).or_default() += 1;
+            }
+        }
+    }
+    // The priority list: the majority's pairwise order, one product at a
+    // time (the first not after any remaining one; in a cycle, the one
+    // after the fewest).
+    let after = |m: &str, n: &str| {
+        votes.get(&(m, n)).copied().unwrap_or(0) > votes.get(&(n, m)).copied().unwrap_or(0)
+    };
+    let mut left = names.clone();
+    let mut list = Vec::new();
+    while !left.is_empty() {
+        let behind = |n: &str| left.iter().filter(|&&m| m != n && after(m, n)).count();
+        let i = (0..left.len())
+            .min_by_key(|&i| behind(left[i]))
+            .unwrap_or(0);
+        list.push(left.remove(i).to_owned());
+    }
+    let candidates = [
+        SequenceRule::Ascending,
+        SequenceRule::Descending,
+        SequenceRule::Listed(list),
+    ];
+    let breaking = |rule: &SequenceRule| -> Vec<usize> {
+        demos
+            .iter()
+            .zip(&inventories)
+            .enumerate()
+            .filter(|(_, (d, inv))| !follows(rule, inv, &d.sequence))
+            .map(|(k, _)| k)
+            .collect()
+    };
+    let mut best: Option<Inferred> = None;
+    for rule in candidates {
+        let exceptions = breaking(&rule);
+        if best
+            .as_ref()
+            .is_none_or(|b| exceptions.len() < b.exceptions.len())
+        {
+            best = Some(Inferred { rule, exceptions });
+        }
+    }
+    let best = best.unwrap_or(Inferred {
+        rule: SequenceRule::Ascending,
+        exceptions: Vec::new(),
+    });
+    let agree = demos.len() - best.exceptions.len();
+    if (agree as f64) < RULE_MAJORITY * demos.len() as f64 {
+        let detail = match &best.exceptions[..] {
+            [first, ..] => format!(
+                "the best rule, {}, explains {agree} of {} demonstrations (block `{}`, demonstration {first}, handles {} in another order)",
+                best.rule,
+                demos.len(),
+                demos[*first].block,
+                demos[*first].sequence.join(", ")
+            ),
+            [] => String::new(),
+        };
+        return Err(PipelineError::ContradictorySequence { detail });
+    }
+    Ok(best)
 }

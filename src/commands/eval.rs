@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use packwright_interface::PlannerKind;
 use packwright_pipeline::episode::cell_of;
 use packwright_pipeline::evaluate::{CaseResult, Row, markdown, run_case};
-use packwright_pipeline::models::choose_planner;
+use packwright_pipeline::models::{choose_planner, taught};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -138,7 +138,8 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
             planners.retain(|p| *p == PlannerKind::Learned);
         }
         for &p in &planners {
-            rows.push(Row::of(&suite.name, p, &results));
+            let taught = nets.as_ref().map(|n| taught(n, &cell));
+            rows.push(Row::of(&suite.name, &cell, taught, p, &results));
         }
     }
     let table = markdown(&rows);
@@ -154,7 +155,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
     };
     if args.json {
         let report = EvalReport {
-            schema: "packwright.eval/1",
+            schema: "packwright.eval/2",
             seed: args.seed,
             machine,
             rows: &rows,

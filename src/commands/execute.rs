@@ -6,7 +6,7 @@ use crate::fsio::FsLoader;
 use packwright_interface::outcome::{Outcome, PlannerKind, Report};
 use packwright_motion::execute::{self, Planner};
 use packwright_pipeline::episode::{episode, find_setup};
-use packwright_pipeline::models::choose_planner;
+use packwright_pipeline::models::{choose_planner, taught};
 
 /// The report as JSON, with the task's name.
 pub fn to_json(name: &str, r: &Report) -> serde_json::Value {
@@ -26,6 +26,15 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
     let ep = episode(&compiled.model, &setup)?;
     let mut sim = ep.simulator(ep.home()?)?;
     let (kind, model) = choose_planner(args.planner, args.model.as_deref(), &ep.task.cell.name)?;
+    if let Some(nets) = &model
+        && !taught(nets, &ep.task.cell.name)
+    {
+        errln!(
+            "note: the model was taught cell(s) {}, not `{}`: it answers from this cell's geometry (see README, \"Learning\")",
+            nets.task.cells.join(", "),
+            ep.task.cell.name
+        );
+    }
     let planner = match (&model, kind) {
         (Some(nets), _) => Planner::Learned {
             policy: nets,

@@ -76,7 +76,11 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
             0 => 0,
             r => config.epochs + (r - 1) * config.dagger_epochs,
         };
-        b.set_position((before + p.epoch) as u64);
+        let position = (before + p.epoch) as u64;
+        if b.length().is_some_and(|l| position > l) {
+            b.set_length(position);
+        }
+        b.set_position(position);
         let metric = match p.network {
             Network::Reasoner => format!("accuracy {:.3}", p.valid_metric),
             Network::SubGoal => format!("error {:.1} mm", p.valid_metric * 1000.0),
@@ -110,14 +114,20 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
         outln!("{}", serde_json::to_string(&report)?);
     } else {
         outln!(
-            "wrote {}: {} demonstrations of cell {} ({} replayed in {:.1} s), trained in {:.1} s",
+            "wrote {}: {} demonstrations of {} {} ({} replayed in {:.1} s), trained in {:.1} s",
             args.output.display(),
             report.demonstrations,
-            report.cell,
+            if report.cells.len() == 1 {
+                "cell"
+            } else {
+                "cells"
+            },
+            report.cells.join(", "),
             report.replayed,
             report.replay_s,
             report.training_s
         );
+        outln!("  sequence rule taught: {}", report.sequence);
         outln!(
             "  reasoner: held-out accuracy {:.3} ({} samples, best epoch {}/{})",
             report.reasoner.valid_metric,
@@ -156,6 +166,9 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
                 }
             );
         }
+    }
+    for w in &report.warnings {
+        errln!("warning: {w}");
     }
     Ok(if report.replay_failures.is_empty() {
         Exit::Success

@@ -2,19 +2,21 @@
 //! training set, the expert coach for DAgger, the three networks, and the
 //! report saved as `metrics.json`.
 
-use crate::relabel::ExpertCoach;
-use crate::training::{Metrics, NetworkMetrics, Progress, TrainError, train};
+use crate::relabel::{ExpertCoach, Recorded};
+use crate::training::{Metrics, Network, NetworkMetrics, Progress, TrainError, train};
 use crate::{RoundMetrics, Trained};
 use packwright_nets::TrainConfig;
 use packwright_pipeline::PipelineError;
 use packwright_pipeline::teach::{Lesson, Replayed};
 use serde::Serialize;
 
-/// `metrics.json` (schema `packwright.metrics/1`).
+/// `metrics.json` (schema `packwright.metrics/2`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TrainingReport {
     pub schema: &'static str,
-    pub cell: String,
+    pub cells: Vec<String>,
+    /// The sequence rule the demonstrations follow (the reasoner's chain).
+    pub sequence: packwright_interface::SequenceRule,
     pub demos: Vec<String>,
     pub demonstrations: usize,
     pub replayed: usize,
@@ -28,6 +30,128 @@ pub struct TrainingReport {
     pub subgoal: NetworkMetrics,
     pub dynamics: NetworkMetrics,
     pub dagger: Vec<RoundMetrics>,
+    /// What looks weak: held-out figures below the targets, networks
+    /// still improving when training stopped.
+    pub warnings: Vec<Weakness>,
+}
+
+/// Held-out reasoner accuracy below which `train` warns.
+pub const MIN_REASONER_ACCURACY: f64 = 0.99;
+/// Held-out mean sub-goal error (m) above which `train` warns.
+pub const MAX_SUBGOAL_ERROR: f64 = 0.010;
+
+/// A weakness of a trained model that `train` reports.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Weakness {
+    /// Held-out reasoner accuracy below [`MIN_REASONER_ACCURACY`]; the
+    /// weakest stage and its accuracy.
+    Reasoner {
+        accuracy: f64,
+        weakest: String,
+        weakest_accuracy: f64,
+    },
+    /// Held-out mean sub-goal error above [`MAX_SUBGOAL_ERROR`]; the
+    /// weakest stage and sub-goal and its error.
+    SubGoal {
+        error_m: f64,
+        weakest: String,
+        weakest_error_m: f64,
+    },
+    /// Still improving at the most epochs allowed.
+    NotConverged { network: String, epochs: usize },
+    /// Demonstrations that break the taught sequence rule (their
+    /// decisions were left out of the reasoner's examples).
+    SequenceExceptions {
+        exceptions: usize,
+        demonstrations: usize,
+        /// The first one's block and its sequence.
+        block: String,
+        sequence: Vec<String>,
+    },
+}
+
+impl std::fmt::Display for Weakness {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Weakness::Reasoner {
+                accuracy,
+                weakest,
+                weakest_accuracy,
+            } => write!(
+                f,
+                "held-out reasoner accuracy {accuracy:.3} is below {MIN_REASONER_ACCURACY} (weakest: {weakest} decisions, {weakest_accuracy:.3}); teach more demonstrations of that stage"
+            ),
+            Weakness::SubGoal {
+                error_m,
+                weakest,
+                weakest_error_m,
+            } => write!(
+                f,
+                "held-out sub-goal error {:.1} mm is above {:.0} mm (weakest: {weakest} sub-goal, {:.1} mm)",
+                error_m * 1000.0,
+                MAX_SUBGOAL_ERROR * 1000.0,
+                weakest_error_m * 1000.0
+            ),
+            Weakness::NotConverged { network, epochs } => write!(
+                f,
+                "the {network} was still improving after {epochs} epochs; raise --epochs"
+            ),
+            Weakness::SequenceExceptions {
+                exceptions,
+                demonstrations,
+                block,
+                sequence,
+            } => write!(
+                f,
+                "{exceptions} of {demonstrations} demonstrations break the taught sequence rule (the first, in block `{block}`, handles {}); their decisions were not taught",
+                sequence.join(", ")
+            ),
+        }
+    }
+}
+
+/// The weaknesses of a training run's metrics.
+pub fn weaknesses(metrics: &[(Network, &NetworkMetrics)]) -> Vec<Weakness> {
+    let mut out = Vec::new();
+    for &(network, m) in metrics {
+        let worst = |higher_is_better: bool| {
+            m.parts
+                .iter()
+                .max_by(|a, b| {
+                    let o = a.1.total_cmp(b.1);
+                    if higher_is_better { o.reverse() } else { o }
+                })
+                .map(|(k, v)| (k.clone(), *v))
+                .unwrap_or_default()
+        };
+        match network {
+            Network::Reasoner if m.valid_metric < MIN_REASONER_ACCURACY => {
+                let (weakest, weakest_accuracy) = worst(true);
+                out.push(Weakness::Reasoner {
+                    accuracy: m.valid_metric,
+                    weakest,
+                    weakest_accuracy,
+                });
+            }
+            Network::SubGoal if m.valid_metric > MAX_SUBGOAL_ERROR => {
+                let (weakest, weakest_error_m) = worst(false);
+                out.push(Weakness::SubGoal {
+                    error_m: m.valid_metric,
+                    weakest,
+                    weakest_error_m,
+                });
+            }
+            _ => {}
+        }
+        if !m.converged {
+            out.push(Weakness::NotConverged {
+                network: network.to_string(),
+                epochs: m.epochs_run,
+            });
+        }
+    }
+    out
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -54,9 +178,22 @@ pub fn run(
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<(Trained, TrainingReport), JobError> {
     let set = lesson.training_set(replayed)?;
-    let ep = lesson.first_episode()?;
-    let logs = replayed.complete();
-    let coach = ExpertCoach::new(&ep.arm, ep.task.cell.base, ep.task.cell.suction, &logs);
+    let episodes = lesson.episodes()?;
+    let recorded: Vec<Recorded> = episodes
+        .iter()
+        .zip(&replayed.logs)
+        .filter_map(|(ep, log)| {
+            log.as_ref().map(|log| Recorded {
+                log,
+                base: ep.task.cell.base,
+                suction: ep.task.cell.suction,
+            })
+        })
+        .collect();
+    // One arm coaches: the first demonstration's (a lesson whose cells
+    // have different arms is coached with it; the rollouts then label
+    // those cells' states less well, which the DAgger figures show).
+    let coach = ExpertCoach::new(&episodes[0].arm, &recorded);
     let (mut trained, metrics) = train(&set, config, Some(&coach), progress)?;
     trained.set_task(lesson.task());
     let Metrics {
@@ -67,9 +204,27 @@ pub fn run(
         seconds,
     } = metrics;
     let failures = replayed.failures();
+    let mut warnings = weaknesses(&[
+        (Network::Reasoner, &reasoner),
+        (Network::SubGoal, &subgoal),
+        (Network::Dynamics, &dynamics),
+    ]);
+    if let Some(&first) = lesson.exceptions.first() {
+        let d = &lesson.chosen[first];
+        warnings.insert(
+            0,
+            Weakness::SequenceExceptions {
+                exceptions: lesson.exceptions.len(),
+                demonstrations: lesson.chosen.len(),
+                block: d.block.clone(),
+                sequence: d.sequence.clone(),
+            },
+        );
+    }
     let report = TrainingReport {
-        schema: "packwright.metrics/1",
-        cell: lesson.cell.clone(),
+        schema: "packwright.metrics/2",
+        cells: lesson.cells.clone(),
+        sequence: lesson.sequence.clone(),
         demos: lesson.blocks.clone(),
         demonstrations: lesson.chosen.len(),
         replayed: lesson.chosen.len() - failures.len(),
@@ -85,6 +240,7 @@ pub fn run(
         subgoal,
         dynamics,
         dagger,
+        warnings,
     };
     Ok((trained, report))
 }

@@ -4,9 +4,9 @@
 use crate::data::GraphBatch;
 use burn::nn::{Linear, LinearConfig};
 use burn::prelude::*;
-use burn::tensor::activation::{relu, softmax, tanh};
+use burn::tensor::activation::{relu, tanh};
 use packwright_nets::ModelConfig;
-use packwright_nets::features::{NODE_FEATURES, subgoal_width};
+use packwright_nets::features::{ACTION_INPUTS, NODE_FEATURES, SLOT_FEATURES, SUBGOAL_INPUTS};
 use packwright_nets::forward::{
     Dense, DynamicsWeights, ReasonerWeights, SageWeights, SubGoalWeights,
 };
@@ -53,7 +53,8 @@ impl Sage {
     }
 }
 
-/// The task-level reasoner: node and box scores, then the label.
+/// The task-level reasoner: node and box scores; for the box, a pointer
+/// over the cell's slots.
 ///
 /// Three GraphSAGE layers embed the graph; the box's score reads the max
 /// of the embeddings and the max of the raw node inputs (a max tells a
@@ -63,7 +64,10 @@ impl Sage {
 /// when it also read its embedding, the network learnt from CASE 1
 /// demonstrations the shortcut "my chain neighbour was just packed, so I
 /// am next", right in CASE 1 and wrong when a worker packed products out
-/// of order (ARCHITECTURE.md, "Decisions", has the measurements).
+/// of order (ARCHITECTURE.md, "Decisions", has the measurements). The
+/// slot pointer scores each slot from where it lies relative to the held
+/// product's goal, with the same weights for every slot: a slot no
+/// demonstration used, or another cell's, is scored like any other.
 #[derive(Module, Debug)]
 pub struct Reasoner {
     layers: Vec<Sage>,
@@ -71,15 +75,15 @@ pub struct Reasoner {
     node_score: Linear,
     box_hidden: Linear,
     box_score: Linear,
-    classifier: Vec<Linear>,
+    pointer: Vec<Linear>,
 }
 
 /// The reasoner's outputs for a batch.
 pub struct ReasonerOutput {
     /// [B, m + 1] logits over the nodes and the box (padding at -1e9).
     pub scores: Tensor<2>,
-    /// [B, labels] logits.
-    pub labels: Tensor<2>,
+    /// [B, k] logits over the slots (padding at -1e9).
+    pub slots: Tensor<2>,
 }
 
 impl Reasoner {
@@ -91,17 +95,17 @@ impl Reasoner {
                 neighbours: linear(if i == 0 { NODE_FEATURES } else { h }, h, device),
             })
             .collect();
-        let k = c.classifier_hidden;
+        let k = c.pointer_hidden;
         Reasoner {
             layers,
             node_hidden: linear(NODE_FEATURES, h, device),
             node_score: linear(h, 1, device),
             box_hidden: linear(h + NODE_FEATURES, h, device),
             box_score: linear(h, 1, device),
-            classifier: vec![
-                linear(2 + 3, k, device),
+            pointer: vec![
+                linear(SLOT_FEATURES, k, device),
                 linear(k, k, device),
-                linear(k, c.labels, device),
+                linear(k, 1, device),
             ],
         }
     }
@@ -137,23 +141,19 @@ impl Reasoner {
         Tensor::cat(vec![node, boxed], 1) + score_mask
     }
 
-    /// Label logits from the scores and the handled product's goal: the
-    /// classifier sees the box's probability and the best node's.
-    pub fn label(&self, scores: Tensor<2>, goal: Tensor<2>) -> Tensor<2> {
-        let [b, width] = scores.dims();
-        let p = softmax(scores, 1);
-        let boxed = p.clone().narrow(1, width - 1, 1);
-        let node = p.narrow(1, 0, width - 1).max_dim(1);
-        let mut x = Tensor::cat(vec![boxed, node, goal], 1);
-        let last = self.classifier.len() - 1;
-        for (i, layer) in self.classifier.iter().enumerate() {
+    /// Slot logits [B, k] from slot rows [B, k, SLOT_FEATURES] and their
+    /// mask.
+    pub fn slot_scores(&self, slots: Tensor<3>, slot_mask: Tensor<2>) -> Tensor<2> {
+        let [b, k, _] = slots.dims();
+        let mut x = slots;
+        let last = self.pointer.len() - 1;
+        for (i, layer) in self.pointer.iter().enumerate() {
             x = layer.forward(x);
             if i < last {
                 x = relu(x);
             }
         }
-        debug_assert_eq!(x.dims()[0], b);
-        x
+        x.reshape([b, k]) + slot_mask
     }
 
     /// The weights for the plain forward pass used at run time.
@@ -173,7 +173,7 @@ impl Reasoner {
             node_score: dense(&self.node_score)?,
             box_hidden: dense(&self.box_hidden)?,
             box_score: dense(&self.box_score)?,
-            classifier: denses(&self.classifier)?,
+            pointer: denses(&self.pointer)?,
         })
     }
 
@@ -184,14 +184,14 @@ impl Reasoner {
             batch.mask.clone(),
             batch.score_mask.clone(),
         );
-        let labels = self.label(scores.clone(), batch.goal.clone());
-        ReasonerOutput { scores, labels }
+        let slots = self.slot_scores(batch.slots.clone(), batch.slot_mask.clone());
+        ReasonerOutput { scores, slots }
     }
 }
 
 /// The variational sub-goal planner: tanh encoder to a Gaussian latent
 /// (KL to a unit prior, reparameterised), a Gaussian head over the
-/// sub-goal (offset from the feature).
+/// sub-goal (cylindrical, `features::subgoal_output`).
 #[derive(Module, Debug)]
 pub struct SubGoalPlanner {
     hidden: Vec<Linear>,
@@ -213,10 +213,7 @@ impl SubGoalPlanner {
     pub fn new(c: &ModelConfig, device: &Device) -> SubGoalPlanner {
         let (h, z) = (c.subgoal_hidden, c.subgoal_latent);
         SubGoalPlanner {
-            hidden: vec![
-                linear(subgoal_width(c.labels), h, device),
-                linear(h, h, device),
-            ],
+            hidden: vec![linear(SUBGOAL_INPUTS, h, device), linear(h, h, device)],
             latent_mean: linear(h, z, device),
             latent_log_std: linear(h, z, device),
             decoder: linear(h + z, h, device),
@@ -258,7 +255,7 @@ impl SubGoalPlanner {
     }
 }
 
-/// The dynamics policy: (delta, base/shoulder/elbow) -> joint steps, as
+/// The dynamics policy: (delta, shoulder, elbow) -> joint steps, as
 /// fractions of 5 degrees. The output at delta = 0 is subtracted, so a
 /// reached sub-goal asks for no motion.
 #[derive(Module, Debug)]
@@ -271,7 +268,7 @@ impl DynamicsPolicy {
         let h = c.dynamics_hidden;
         DynamicsPolicy {
             layers: vec![
-                linear(6, h, device),
+                linear(ACTION_INPUTS, h, device),
                 linear(h, h, device),
                 linear(h, 3, device),
             ],
@@ -296,13 +293,14 @@ impl DynamicsPolicy {
         x
     }
 
-    /// `x`: [B, 6] = (delta, joints).
+    /// `x`: [B, ACTION_INPUTS] (`features::action_input`: delta in the
+    /// base joint's frame, then shoulder and elbow).
     pub fn forward(&self, x: Tensor<2>) -> Tensor<2> {
-        let [b, _] = x.dims();
+        let [b, w] = x.dims();
         let still = Tensor::cat(
             vec![
                 Tensor::zeros([b, 3], &x.device()),
-                x.clone().narrow(1, 3, 3),
+                x.clone().narrow(1, 3, w - 3),
             ],
             1,
         );

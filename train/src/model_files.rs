@@ -86,10 +86,13 @@ impl Trained {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::{graph_inputs, matrix};
+    use crate::data::{graph_inputs, matrix, slot_inputs};
     use crate::training::SEEDED_DEVICE;
     use burn::prelude::*;
-    use packwright_nets::features::{subgoal_input, subgoal_width};
+    use packwright_interface::{Graph, Node, Stage, SubGoalQuery};
+    use packwright_nets::features::{
+        ACTION_INPUTS, SUBGOAL_INPUTS, action_input, node_rows, slot_rows, subgoal_input,
+    };
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -115,7 +118,7 @@ mod tests {
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
         let device = Device::flex();
-        let c = ModelConfig::new(6);
+        let c = ModelConfig::new();
         let trained = Trained::new(
             c.clone(),
             TrainConfig::default(),
@@ -131,44 +134,61 @@ mod tests {
         let plain = trained.networks.weights();
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         for m in 1..=20 {
-            let nodes: Vec<[f32; 4]> = (0..m)
-                .map(|_| {
-                    [
+            let nodes: Vec<Node> = (0..m)
+                .map(|_| Node {
+                    centre: [
                         rng.random_range(-1.0..1.0),
                         rng.random_range(-1.0..1.0),
                         rng.random_range(0.0..0.5),
-                        f32::from(u8::from(rng.random_bool(0.5))),
-                    ]
+                    ],
+                    height: rng.random_range(0.02..0.1),
+                    selected: rng.random_bool(0.5),
+                    goal: [rng.random_range(-1.0..1.0), 0.6, 0.03],
                 })
                 .collect();
+            let graph = Graph {
+                nodes,
+                slots: (0..1 + m % 7)
+                    .map(|i| [0.1 * i as f32 - 0.2, rng.random_range(0.5..0.7), 0.0])
+                    .collect(),
+                held_goal: [rng.random_range(-0.3..0.3), 0.6, 0.03],
+            };
+            let rows = node_rows(&graph);
             let (n, a, mask, score_mask) =
-                graph_inputs(std::iter::once(nodes.as_slice())).tensors(&device);
+                graph_inputs(std::slice::from_ref(&rows)).tensors(&device);
             let scores = reasoner.scores(n, a, mask, score_mask);
-            let plain_scores = plain.reasoner.scores(&nodes);
+            let plain_scores = plain.reasoner.scores(&rows);
+            assert!(close(&values(scores), &plain_scores), "scores, m = {m}");
+            assert_eq!(plain_scores, loaded.weights().reasoner.scores(&rows));
+            let slot_rows = slot_rows(&graph);
+            let (slots, slot_mask) = slot_inputs(std::slice::from_ref(&slot_rows), &device);
+            let burn_slots = reasoner.slot_scores(slots, slot_mask);
             assert!(
-                close(&values(scores.clone()), &plain_scores),
-                "scores, m = {m}"
-            );
-            assert_eq!(plain_scores, loaded.weights().reasoner.scores(&nodes));
-            let goal = [rng.random_range(-1.0..1.0), 0.5, 0.1];
-            let labels = reasoner.label(scores, matrix(1, 3, goal.to_vec(), &device));
-            assert!(
-                close(&values(labels), &plain.reasoner.labels(&plain_scores, goal)),
-                "labels, m = {m}"
+                close(&values(burn_slots), &plain.reasoner.slot_scores(&slot_rows)),
+                "slots, m = {m}"
             );
 
-            let mut x = Vec::new();
-            let feature = [0.5, -0.2, 0.1];
-            let tool = [rng.random_range(-1.0..1.0), 0.3, 0.6];
-            subgoal_input(&mut x, feature, tool, m % 6, m % 3, 6);
-            let burn = subgoal.forward(matrix(1, subgoal_width(6), x.clone(), &device), None);
+            let query = SubGoalQuery {
+                stage: if m % 2 == 0 {
+                    Stage::Picking
+                } else {
+                    Stage::Placing
+                },
+                index: m % 3,
+                feature: [0.5, -0.2, 0.1],
+                tool: [rng.random_range(-1.0..1.0), 0.3, 0.6],
+                height: 0.05,
+                base: [0.1, 0.0, 0.2],
+            };
+            let x = subgoal_input(&query);
+            let burn = subgoal.forward(matrix(1, SUBGOAL_INPUTS, x.to_vec(), &device), None);
             assert!(close(&values(burn.mean), &plain.subgoal.mean(&x)));
             assert_eq!(plain.subgoal.mean(&x), loaded.weights().subgoal.mean(&x));
 
             let delta = [rng.random_range(-0.5..0.5), 0.1, -0.2];
             let joints = [rng.random_range(-3.0..3.0), -1.0, 1.5];
-            let input: Vec<f32> = delta.into_iter().chain(joints).collect();
-            let burn = dynamics.forward(matrix(1, 6, input, &device));
+            let input = action_input(delta, joints);
+            let burn = dynamics.forward(matrix(1, ACTION_INPUTS, input.to_vec(), &device));
             assert!(close(&values(burn), &plain.dynamics.action(delta, joints)));
             assert_eq!(
                 plain.dynamics.action(delta, joints),

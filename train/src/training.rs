@@ -2,7 +2,7 @@
 //! split, early stopping on its loss (the best epoch's weights are kept).
 
 use crate::dagger::{Coach, RoundMetrics, dagger};
-use crate::data::{action_batch, graph_batch, subgoal_batch};
+use crate::data::{GraphBatch, action_batch, graph_batch, subgoal_batch};
 use crate::model::{DynamicsPolicy, Reasoner, SubGoalPlanner};
 use crate::model_files::{SaveError, Trained};
 use burn::module::Module;
@@ -10,12 +10,16 @@ use burn::optim::{AdamConfig, GradientsParams};
 use burn::prelude::*;
 use burn::tensor::Distribution;
 use burn::tensor::activation::{log_softmax, softplus};
-use packwright_nets::features::{ActionExample, NODE_FEATURES, TrainingSet};
+use packwright_interface::Stage;
+use packwright_nets::features::{
+    ActionExample, GraphExample, SubGoalExample, TrainingSet, subgoal_position,
+};
 use packwright_nets::{ModelConfig, TrainConfig};
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// One of the three networks.
@@ -62,6 +66,14 @@ pub struct NetworkMetrics {
     /// See [`Progress::valid_metric`]; named in `metric`.
     pub valid_metric: f64,
     pub metric: String,
+    /// The held-out metric per part (reasoner: per stage; sub-goal
+    /// planner: per stage and sub-goal), to say which is weak.
+    #[serde(default)]
+    pub parts: BTreeMap<String, f64>,
+    /// Whether training stopped on a held-out plateau (false: it was
+    /// still improving at the most epochs allowed).
+    #[serde(default)]
+    pub converged: bool,
     pub seconds: f64,
 }
 
@@ -81,11 +93,14 @@ pub struct Metrics {
 pub enum TrainError {
     #[error("no {0} samples to learn from")]
     Empty(&'static str),
-    #[error("a sample has label {label} but the model has {labels} labels")]
-    Label { label: usize, labels: usize },
+    #[error("a placing sample points at slot {slot} of a cell with {slots} slots")]
+    Slot { slot: usize, slots: usize },
     #[error("the trained weights: {0}")]
     Weights(#[from] SaveError),
 }
+
+/// The sub-goal planner's mean is fitted in units of this (m).
+const MEAN_SCALE: f64 = 0.01;
 
 /// Squared action size (in units of 5 degrees) below which the dynamics
 /// loss stops growing relative: 0.05 is a quarter of a degree.
@@ -116,17 +131,94 @@ fn binary(logits: Tensor<2>, one_hot: Tensor<2>) -> Tensor<1> {
         .mean()
 }
 
-/// The reasoner's loss: the cross-entropies of the choice and of the label,
-/// summed, plus each choice output's own binary cross-entropy.
+/// The reasoner's loss: the cross-entropy of the choice (node or box),
+/// each choice output's own binary cross-entropy, and for placing samples
+/// the cross-entropy of the slot pointer (picking samples have no slot
+/// target: zeros add nothing).
 fn reasoner_loss(
     scores: Tensor<2>,
-    labels: Tensor<2>,
+    slots: Tensor<2>,
     target: Tensor<2>,
-    label: Tensor<2>,
+    slot_target: Tensor<2>,
 ) -> Tensor<1> {
     cross_entropy(scores.clone(), target.clone())
-        + cross_entropy(labels, label)
         + binary(scores, target)
+        + cross_entropy(slots, slot_target)
+}
+
+/// The reasoner's held-out loss, accuracy (node or box right, and the
+/// slot when placing) and accuracy per stage.
+fn reasoner_check(
+    m: &Reasoner,
+    b: &GraphBatch,
+    graphs: &[&GraphExample],
+) -> (f64, f64, BTreeMap<String, f64>) {
+    let out = m.forward(b);
+    let loss = scalar(reasoner_loss(
+        out.scores.clone(),
+        out.slots.clone(),
+        b.target.clone(),
+        b.slot_target.clone(),
+    ));
+    let chosen = argmax_rows(out.scores);
+    let slots = argmax_rows(out.slots);
+    let mut right = [(0usize, 0usize); 2];
+    for (g, (c, s)) in graphs.iter().zip(chosen.iter().zip(&slots)) {
+        let m = g.graph.nodes.len();
+        let ok = (*c).min(m) == g.target.min(m) && g.slot.is_none_or(|want| want == *s);
+        let part = usize::from(g.slot.is_some());
+        right[part].0 += usize::from(ok);
+        right[part].1 += 1;
+    }
+    let parts = [Stage::Picking, Stage::Placing]
+        .into_iter()
+        .zip(right)
+        .filter(|(_, (_, n))| *n > 0)
+        .map(|(stage, (ok, n))| (stage.to_string(), ok as f64 / n as f64))
+        .collect();
+    let accuracy = (right[0].0 + right[1].0) as f64 / graphs.len().max(1) as f64;
+    (loss, accuracy, parts)
+}
+
+/// The sub-goal planner's held-out negative log-likelihood, mean error
+/// (m, the decoded cup-tip position against the demonstrated one) and
+/// mean error per stage and sub-goal.
+fn subgoal_check(
+    m: &SubGoalPlanner,
+    x: &Tensor<2>,
+    y: &Tensor<2>,
+    examples: &[&SubGoalExample],
+) -> (f64, f64, BTreeMap<String, f64>) {
+    let out = m.forward(x.clone(), None);
+    let diff = y.clone() - out.mean.clone();
+    let nll = scalar(
+        (diff.div(out.log_std.clone().exp()).powf_scalar(2.0) * 0.5 + out.log_std)
+            .sum_dim(1)
+            .mean(),
+    );
+    let means = out.mean.into_data().try_to_vec::<f32>().unwrap_or_default();
+    let mut sums: BTreeMap<String, (f64, usize)> = BTreeMap::new();
+    let mut total = 0.0;
+    for (e, v) in examples.iter().zip(means.chunks_exact(3)) {
+        let p = subgoal_position(&e.query, [v[0], v[1], v[2]]);
+        let error = f64::from(
+            (0..3)
+                .map(|j| (p[j] - e.target[j]).powi(2))
+                .sum::<f32>()
+                .sqrt(),
+        );
+        total += error;
+        let entry = sums
+            .entry(format!("{} {}", e.query.stage, e.query.index + 1))
+            .or_default();
+        entry.0 += error;
+        entry.1 += 1;
+    }
+    let parts = sums
+        .into_iter()
+        .map(|(k, (sum, n))| (k, sum / n.max(1) as f64))
+        .collect();
+    (nll, total / examples.len().max(1) as f64, parts)
 }
 
 /// Index of the largest value of each row.
@@ -166,17 +258,21 @@ fn fit<M: Module>(
     let batch = batch.max(1);
     let mut best = (f64::INFINITY, 0usize, f64::NAN, f64::NAN, model.clone());
     let mut epochs_run = 0;
-    for epoch in 1..=config.epochs {
+    let mut converged = false;
+    // Past `config.epochs`, a network still improving goes on (at the
+    // final learning rate) until a shorter plateau, up to twice as long.
+    let most = 2 * config.epochs.max(1);
+    let plateau = config.patience.max(1);
+    let late_plateau = (config.patience / 4).max(1);
+    for epoch in 1..=most {
         epochs_run = epoch;
-        let progress_made = (epoch - 1) as f64 / config.epochs.max(2).saturating_sub(1) as f64;
+        let progress_made =
+            ((epoch - 1) as f64 / config.epochs.max(2).saturating_sub(1) as f64).min(1.0);
         let lr = config.learning_rate * 0.1f64.powf(progress_made);
         let mut total = 0.0;
         let mut batches = 0;
         while batches < config.batches_per_epoch.max(1) {
             if cursor >= order.len() {
-                if batches > 0 && order.len() <= batch * config.batches_per_epoch {
-                    break;
-                }
                 order.shuffle(rng);
                 cursor = 0;
             }
@@ -202,7 +298,10 @@ fn fit<M: Module>(
         });
         if valid_loss < best.0 {
             best = (valid_loss, epoch, train_loss, metric, model.clone());
-        } else if epoch - best.1 >= config.patience {
+        } else if epoch - best.1 >= plateau
+            || (epoch >= config.epochs && epoch - best.1 >= late_plateau)
+        {
+            converged = true;
             break;
         }
     }
@@ -216,6 +315,8 @@ fn fit<M: Module>(
         valid_loss,
         valid_metric: metric,
         metric: String::new(),
+        parts: BTreeMap::new(),
+        converged,
         seconds: started.elapsed().as_secs_f64(),
     };
     (model, metrics)
@@ -245,15 +346,13 @@ pub fn train(
     if set.actions.is_empty() {
         return Err(TrainError::Empty("action"));
     }
-    let labels = set.labels;
-    let too_big = set
-        .graphs
-        .iter()
-        .map(|g| g.label)
-        .chain(set.subgoals.iter().map(|s| s.label))
-        .find(|&l| l >= labels);
-    if let Some(label) = too_big {
-        return Err(TrainError::Label { label, labels });
+    let bad_slot = set.graphs.iter().find_map(|g| {
+        g.slot
+            .filter(|&s| s >= g.graph.slots.len())
+            .map(|s| (s, g.graph.slots.len()))
+    });
+    if let Some((slot, slots)) = bad_slot {
+        return Err(TrainError::Slot { slot, slots });
     }
     let _turn = SEEDED_DEVICE
         .lock()
@@ -262,7 +361,7 @@ pub fn train(
     let plain = Device::flex();
     plain.seed(config.seed);
     let device = plain.clone().autodiff();
-    let model_config = ModelConfig::new(labels);
+    let model_config = ModelConfig::new();
     // Initial weights come from the seeded device, one network after the
     // other; then the dynamics policy trains on a second thread (it draws
     // no random numbers from the device, so the run stays reproducible).
@@ -271,8 +370,8 @@ pub fn train(
     let initial_dynamics = DynamicsPolicy::new(&model_config, &device);
     // Parameters are initialised lazily, on first use: use them all here,
     // in a fixed order, before any thread starts.
-    let _ = initial_reasoner.forward(&graph_batch(&[&set.graphs[0]], labels, &device));
-    let _ = initial_subgoal.forward(subgoal_batch(&[&set.subgoals[0]], labels, &device).0, None);
+    let _ = initial_reasoner.forward(&graph_batch(&[&set.graphs[0]], &device));
+    let _ = initial_subgoal.forward(subgoal_batch(&[&set.subgoals[0]], &device).0, None);
     let _ = initial_dynamics.forward(action_batch(&[&set.actions[0]], &device).0);
     let rng_for = |k: u64| ChaCha8Rng::seed_from_u64(config.seed.wrapping_mul(3).wrapping_add(k));
     let (
@@ -310,12 +409,15 @@ pub fn train(
             (model, metrics, dagger)
         });
         let mut rng = rng_for(0);
-        let position_noise = config.position_noise;
-
         let reasoner = {
             let (train_idx, valid_idx) = split(set.graphs.len(), config.holdout, &mut rng);
             let pick = |idx: &[usize]| idx.iter().map(|&i| &set.graphs[i]).collect::<Vec<_>>();
-            let valid_graphs = pick(&valid_idx);
+            let valid_graphs = if valid_idx.is_empty() {
+                pick(&train_idx)
+            } else {
+                pick(&valid_idx)
+            };
+            let valid_batch = graph_batch(&valid_graphs, &plain);
             let (reasoner, mut reasoner_metrics) = fit(
                 (Network::Reasoner, 0),
                 initial_reasoner,
@@ -325,60 +427,21 @@ pub fn train(
                 config,
                 &mut rng,
                 |m, chunk| {
-                    let mut b = graph_batch(&pick(chunk), labels, &device);
-                    if position_noise > 0.0 {
-                        // Sensing noise on (x, y, z) of the present nodes.
-                        let dims = b.nodes.dims();
-                        let xyz = Tensor::<1>::from_floats([1.0, 1.0, 1.0, 0.0, 0.0], &device)
-                            .reshape([1, 1, NODE_FEATURES]);
-                        let noise = Tensor::random(
-                            dims,
-                            Distribution::Normal(0.0, position_noise),
-                            &device,
-                        );
-                        b.nodes = b.nodes + noise * xyz * b.mask.clone();
-                    }
+                    let b = graph_batch(&pick(chunk), &device);
                     let out = m.forward(&b);
-                    reasoner_loss(out.scores, out.labels, b.target, b.label)
+                    reasoner_loss(out.scores, out.slots, b.target, b.slot_target)
                 },
                 |m| {
-                    let graphs = if valid_graphs.is_empty() {
-                        pick(&train_idx)
-                    } else {
-                        valid_graphs.clone()
-                    };
-                    let b = graph_batch(&graphs, labels, &plain);
-                    let out = m.valid().forward(&b);
-                    let loss = scalar(reasoner_loss(
-                        out.scores.clone(),
-                        out.labels.clone(),
-                        b.target.clone(),
-                        b.label.clone(),
-                    ));
-                    let chosen = argmax_rows(out.scores);
-                    let labelled = argmax_rows(out.labels);
-                    let right = graphs
-                        .iter()
-                        .zip(chosen.iter().zip(&labelled))
-                        .filter(|(g, (c, l))| {
-                            let want = if g.target >= g.nodes.len() {
-                                usize::MAX
-                            } else {
-                                g.target
-                            };
-                            let got = if **c >= g.nodes.len() {
-                                usize::MAX
-                            } else {
-                                **c
-                            };
-                            want == got && **l == g.label
-                        })
-                        .count();
-                    (loss, right as f64 / graphs.len().max(1) as f64)
+                    let (loss, accuracy, _) =
+                        reasoner_check(&m.valid(), &valid_batch, &valid_graphs);
+                    (loss, accuracy)
                 },
                 progress,
             );
-            reasoner_metrics.metric = "held-out accuracy (node/box and label both right)".into();
+            reasoner_metrics.metric =
+                "held-out accuracy (node or box right, and the slot when placing)".into();
+            reasoner_metrics.parts =
+                reasoner_check(&reasoner.valid(), &valid_batch, &valid_graphs).2;
             (reasoner, reasoner_metrics)
         };
         let mut rng = rng_for(1);
@@ -390,7 +453,8 @@ pub fn train(
             } else {
                 valid_idx.clone()
             };
-            let (vx, vy) = subgoal_batch(&pick(&eval_idx), labels, &plain);
+            let valid_examples = pick(&eval_idx);
+            let (vx, vy) = subgoal_batch(&valid_examples, &plain);
             let latent = model_config.subgoal_latent;
             let kl_weight = config.kl_weight;
             let (subgoal, mut subgoal_metrics) = fit(
@@ -402,20 +466,32 @@ pub fn train(
                 config,
                 &mut rng,
                 |m, chunk| {
-                    let (x, y) = subgoal_batch(&pick(chunk), labels, &device);
+                    let (x, y) = subgoal_batch(&pick(chunk), &device);
                     let noise = Tensor::random(
                         [chunk.len(), latent],
                         Distribution::Normal(0.0, 1.0),
                         &device,
                     );
                     let out = m.forward(x, Some(noise));
-                    let nll = ((y - out.mean)
+                    // The mean (what runs) fits by squared error in units
+                    // of 1 cm; the Gaussian's spread by its likelihood
+                    // around that mean, detached. (Fitting the mean by the
+                    // likelihood let it give up where it was hard, with a
+                    // wide spread: 39 mm on the approach point.)
+                    let squared = (y.clone() - out.mean.clone())
+                        .div_scalar(MEAN_SCALE)
+                        .powf_scalar(2.0)
+                        .sum_dim(1)
+                        .mean()
+                        * 0.5;
+                    let nll = ((y - out.mean.detach())
                         .div(out.log_std.clone().exp())
                         .powf_scalar(2.0)
                         * 0.5
                         + out.log_std)
                         .sum_dim(1)
                         .mean();
+                    let nll = nll + squared;
                     let kl = (out.latent_mean.powf_scalar(2.0)
                         + out.latent_log_std.clone().mul_scalar(2.0).exp()
                         - out.latent_log_std.mul_scalar(2.0)
@@ -426,20 +502,13 @@ pub fn train(
                     nll + kl * kl_weight
                 },
                 |m| {
-                    let out = m.valid().forward(vx.clone(), None);
-                    let diff = vy.clone() - out.mean;
-                    let nll = scalar(
-                        (diff.clone().div(out.log_std.clone().exp()).powf_scalar(2.0) * 0.5
-                            + out.log_std)
-                            .sum_dim(1)
-                            .mean(),
-                    );
-                    let error = scalar(diff.powf_scalar(2.0).sum_dim(1).sqrt().mean());
+                    let (nll, error, _) = subgoal_check(&m.valid(), &vx, &vy, &valid_examples);
                     (nll, error)
                 },
                 progress,
             );
-            subgoal_metrics.metric = "held-out mean sub-goal error (m)".into();
+            subgoal_metrics.parts = subgoal_check(&subgoal.valid(), &vx, &vy, &valid_examples).2;
+            subgoal_metrics.metric = "held-out mean sub-goal error (m, Euclidean)".into();
             (subgoal, subgoal_metrics)
         };
         let dynamics = dynamics
@@ -517,79 +586,99 @@ pub(super) fn train_dynamics(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use packwright_interface::{Graph, Node, SubGoalQuery};
     use packwright_nets::Networks;
-    use packwright_nets::features::{ActionExample, GraphExample, SubGoalExample};
     use rand::Rng;
 
-    /// A synthetic task with the demonstrations' structure: pick the first
-    /// selected product still on the table (chain order); with a product
-    /// raised, choose the box and the label of its goal's slot. Sub-goals
-    /// are fixed offsets per (label, index); actions a fixed linear map.
+    /// A synthetic task with the demonstrations' structure, in cells of
+    /// 3 to 6 slots in a row: pick the first selected product not in its
+    /// slot (chain order); with a product raised, choose the box and the
+    /// slot of its goal. Sub-goals: fixed offsets above the feature per
+    /// (stage, index); actions a fixed linear map.
     fn synthetic(seed: u64) -> TrainingSet {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let slots = [[-0.1f32, 0.6], [0.0, 0.6], [0.1, 0.6]];
-        let mut set = TrainingSet {
-            labels: 4,
-            ..TrainingSet::default()
+        let mut set = TrainingSet::default();
+        let node = |centre: [f32; 3], selected: bool, goal: [f32; 3]| Node {
+            centre,
+            height: 0.05,
+            selected,
+            goal,
         };
         for _ in 0..300 {
+            let k = rng.random_range(3..=6usize);
+            let x0 = rng.random_range(-0.3..0.0f32);
+            let slots: Vec<[f32; 3]> = (0..k).map(|i| [x0 + 0.1 * i as f32, 0.6, 0.0]).collect();
             let n = rng.random_range(3..=5);
-            let mut nodes: Vec<[f32; 4]> = (0..n)
-                .map(|i| {
-                    [
-                        0.4 + 0.1 * i as f32 + rng.random_range(-0.02..0.02),
-                        -0.3 + rng.random_range(-0.02..0.02),
-                        0.025,
-                        f32::from(u8::from(rng.random_bool(0.6))),
-                    ]
-                })
-                .collect();
-            // Packed products sit in a slot, chain order.
-            let selected: Vec<usize> = (0..n).filter(|&i| nodes[i][3] > 0.5).collect();
-            if selected.is_empty() {
+            let selected: Vec<bool> = (0..n).map(|_| rng.random_bool(0.6)).collect();
+            let chosen: Vec<usize> = (0..n).filter(|&i| selected[i]).collect();
+            if chosen.is_empty() || chosen.len() > k {
                 continue;
             }
-            let packed = rng.random_range(0..selected.len());
-            for (k, &i) in selected.iter().take(packed).enumerate() {
-                nodes[i][0] = slots[k % 3][0];
-                nodes[i][1] = slots[k % 3][1];
+            // The order: the selected products into random distinct slots.
+            let mut free: Vec<usize> = (0..k).collect();
+            let mut slot_of = vec![None; n];
+            for &i in &chosen {
+                let j = rng.random_range(0..free.len());
+                slot_of[i] = Some(free.swap_remove(j));
             }
-            let next = selected[packed];
-            let slot = packed % 3;
-            let goal = [slots[slot][0], slots[slot][1], 0.025];
-            set.graphs.push(GraphExample {
-                nodes: nodes.clone(),
-                goal,
-                target: next,
-                label: 0,
-            });
-            nodes[next][2] += 0.15;
-            set.graphs.push(GraphExample {
+            let goal = |i: usize| slot_of[i].map_or([0.0; 3], |s: usize| [slots[s][0], 0.6, 0.025]);
+            let packed = rng.random_range(0..chosen.len());
+            let mut nodes: Vec<Node> = (0..n)
+                .map(|i| {
+                    let at = [
+                        0.4 + 0.1 * i as f32,
+                        -0.3 + rng.random_range(-0.02..0.02),
+                        0.025,
+                    ];
+                    node(at, selected[i], if selected[i] { goal(i) } else { at })
+                })
+                .collect();
+            for &i in chosen.iter().take(packed) {
+                nodes[i].centre = goal(i);
+            }
+            let next = chosen[packed];
+            let mut graph = Graph {
                 nodes,
-                goal,
+                slots: slots.clone(),
+                held_goal: [0.0; 3],
+            };
+            set.graphs.push(GraphExample {
+                graph: graph.clone(),
+                target: next,
+                slot: None,
+            });
+            graph.nodes[next].centre[2] += 0.15;
+            graph.held_goal = goal(next);
+            set.graphs.push(GraphExample {
+                graph,
                 target: n,
-                label: slot + 1,
+                slot: slot_of[next],
             });
         }
         for _ in 0..1200 {
-            let label = rng.random_range(0..4usize);
+            let stage = if rng.random_bool(0.5) {
+                Stage::Picking
+            } else {
+                Stage::Placing
+            };
             let index = rng.random_range(0..3usize);
             let feature = [
                 rng.random_range(0.3..0.8f32),
                 rng.random_range(-0.5..0.6f32),
                 0.03,
             ];
-            let offset = [
-                0.02 * label as f32,
-                -0.01 * index as f32,
-                0.05 + 0.05 * index as f32,
-            ];
+            let lift =
+                0.05 + 0.05 * index as f32 + if stage == Stage::Placing { 0.02 } else { 0.0 };
             set.subgoals.push(SubGoalExample {
-                feature,
-                tool: [0.5, 0.0, 0.3],
-                label,
-                index,
-                target: std::array::from_fn(|j| feature[j] + offset[j]),
+                query: SubGoalQuery {
+                    stage,
+                    index,
+                    feature,
+                    tool: [0.5, 0.0, 0.3],
+                    height: 0.05,
+                    base: [0.0; 3],
+                },
+                target: [feature[0], feature[1], feature[2] + lift],
             });
         }
         for _ in 0..4000 {
@@ -601,7 +690,12 @@ mod tests {
             ]);
             set.actions.push(ActionExample {
                 delta,
-                joints: std::array::from_fn(|_| rng.random_range(-1.5..1.5f32)),
+                // The base at 0: the map above is in the base joint's frame.
+                joints: [
+                    0.0,
+                    rng.random_range(-1.5..1.5f32),
+                    rng.random_range(-1.5..1.5f32),
+                ],
                 action: action.map(|a| a as f32),
             });
         }
@@ -640,11 +734,9 @@ mod tests {
         let nets = &nets.networks;
         let loaded = Networks::from_files(&files[0].1, &files[1].1, &files[2].1, &files[3].1)
             .expect("loads");
-        let probe = &set.graphs[0];
-        assert_eq!(
-            nets.reason(&probe.nodes, |_| probe.goal),
-            loaded.reason(&probe.nodes, |_| probe.goal)
-        );
+        for probe in &set.graphs[..2] {
+            assert_eq!(nets.reason(&probe.graph), loaded.reason(&probe.graph));
+        }
         assert_eq!(
             nets.action([0.01, 0.02, -0.01], [0.1, -1.0, 1.2]),
             loaded.action([0.01, 0.02, -0.01], [0.1, -1.0, 1.2])
@@ -669,19 +761,16 @@ mod tests {
     #[test]
     fn bad_sets_are_refused() {
         let config = TrainConfig::default();
-        let empty = TrainingSet {
-            labels: 2,
-            ..TrainingSet::default()
-        };
+        let empty = TrainingSet::default();
         assert!(matches!(
             train(&empty, &config, None, &|_| {}),
             Err(TrainError::Empty(_))
         ));
         let mut set = synthetic(1);
-        set.labels = 2;
+        set.graphs[1].slot = Some(99);
         assert!(matches!(
             train(&set, &config, None, &|_| {}),
-            Err(TrainError::Label { .. })
+            Err(TrainError::Slot { slot: 99, .. })
         ));
     }
 }

@@ -8,7 +8,7 @@
 //! [`Fallback`]). A decision that breaks the order stops the arm (a
 //! [`Violation`]).
 
-use super::reasoner::{f32s, goal_input, graph, in_slot};
+use super::reasoner::{f32s, graph, in_slot};
 use super::station::{
     Connect, Load, MAX_RAISES, RAISE_STEP, SUCCESS_RADIUS, Station, Unchecked, judge,
 };
@@ -20,7 +20,7 @@ use packwright_interface::outcome::{
     Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, Violation,
 };
 use packwright_interface::record;
-use packwright_interface::{OrderTask, Policy, World};
+use packwright_interface::{Graph, OrderTask, Policy, SequenceRule, SubGoalQuery, World};
 use packwright_kinematics::{Arm, Joints};
 use std::time::Instant;
 
@@ -112,7 +112,8 @@ struct StagePlan<'l> {
     /// The selected feature: the product's centre (picking) or its box's
     /// top centre (placing).
     feature: [f64; 3],
-    label: usize,
+    /// The handled product's height.
+    height: f64,
     /// Picking: the sensed top face, where the cup's descent stops.
     contact: Option<f64>,
     load: Load<'l>,
@@ -122,6 +123,8 @@ struct StagePlan<'l> {
 struct Learned<'a, W: World> {
     station: Station<'a, W>,
     policy: &'a dyn Policy,
+    /// The policy's taught sequence rule (its chain order).
+    rule: SequenceRule,
     seed: u64,
     fallbacks: Vec<Fallback>,
 }
@@ -190,9 +193,17 @@ impl<W: World> Learned<'_, W> {
             let start = self.station.world.observe().joints;
             let started = Instant::now();
             let tool = f32s(self.station.tip(&start));
+            let base = f32s(self.station.task.cell.base);
             let mut goal = self
                 .policy
-                .subgoal(f32s(plan.feature), tool, plan.label, k)
+                .subgoal(&SubGoalQuery {
+                    stage: plan.stage,
+                    index: k,
+                    feature: f32s(plan.feature),
+                    tool,
+                    height: plan.height as f32,
+                    base,
+                })
                 .map(f64::from);
             // A guarded contact: the cup meets the top face where the
             // product is sensed (its centre plus half its height), as a
@@ -285,13 +296,9 @@ impl<W: World> Learned<'_, W> {
     }
 
     /// The reasoner's decision, timed.
-    fn reason(
-        &mut self,
-        nodes: &[[f32; 4]],
-        goal_of: &dyn Fn(Option<usize>) -> [f32; 3],
-    ) -> packwright_interface::Choice {
+    fn reason(&mut self, graph: &Graph) -> packwright_interface::Choice {
         let decided = Instant::now();
-        let choice = self.policy.reason(nodes, goal_of);
+        let choice = self.policy.reason(graph);
         self.station
             .timing
             .decision_us
@@ -304,10 +311,8 @@ impl<W: World> Learned<'_, W> {
     fn product(&mut self, rows: &mut [ProductReport]) -> Result<(), Stopped> {
         let task = self.station.task;
         let obs = self.station.world.observe();
-        let (nodes, which) = graph(task, &obs.products);
-        let choice = self.reason(&nodes, &|n| {
-            n.map_or([0.0; 3], |n| goal_input(task, &which, &obs.products, n))
-        });
+        let (g, which) = graph(task, &obs.products, &self.rule, None);
+        let choice = self.reason(&g);
         let stop = Stopped::Violation;
         let node = choice.node.ok_or(stop(Violation::BoxWithNothingHeld))?;
         let p = which[node];
@@ -356,15 +361,14 @@ impl<W: World> Learned<'_, W> {
             stage: Stage::Picking,
             product: name,
             feature: centre,
-            label: 0,
+            height: spec.size[2],
             contact: Some(centre[2] + spec.size[2] / 2.0),
             load: Load::ignoring(name),
         })?;
         // Placing: the reasoner sees the held product raised.
         let obs = self.station.world.observe();
-        let (nodes, which) = graph(task, &obs.products);
-        let goal = f32s(task.goal(p, s));
-        let choice = self.reason(&nodes, &|_| goal);
+        let (g, which) = graph(task, &obs.products, &self.rule, Some(p));
+        let choice = self.reason(&g);
         if let Some(n) = choice.node {
             return Err(Halt::Violation(Violation::ProductWhileHolding {
                 chosen: task.products[which[n]].name.clone(),
@@ -388,8 +392,8 @@ impl<W: World> Learned<'_, W> {
         let goals = self.stage(&StagePlan {
             stage: Stage::Placing,
             product: name,
-            feature: task.box_top(s),
-            label: choice.label,
+            feature: task.slot_rim(s),
+            height: spec.size[2],
             contact: None,
             load: Load::holding(&held),
         })?;
@@ -410,6 +414,7 @@ pub(super) fn run<W: World>(
     let mut runner = Learned {
         station: Station::new(world, arm, task),
         policy,
+        rule: policy.sequence(),
         seed,
         fallbacks: Vec::new(),
     };
@@ -432,7 +437,7 @@ pub(super) fn run<W: World>(
     for _ in 0..task.assignment.len() {
         let obs = runner.station.world.observe();
         // Done when no selected, present product is out of its slot.
-        if expected_next(task, &obs.products).is_none() {
+        if expected_next(task, &obs.products, &runner.rule).is_none() {
             break;
         }
         if let Err(halt) = runner.product(&mut rows) {

@@ -26,7 +26,7 @@ mod scripted;
 mod station;
 
 pub use learned::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps};
-pub use reasoner::{expected_next, reasoner_trial};
+pub use reasoner::{demonstrated_decisions, expected_next, graph, reasoner_trial};
 pub use station::{HOME_HEIGHT, Load, Unchecked, checked_samples, home, reach};
 
 use packwright_interface::outcome::{PlannerKind, Report};

@@ -20,6 +20,7 @@ struct StageInfo {
     stage: Stage,
     feature: [f64; 3],
     label: u32,
+    height: f64,
 }
 
 struct Scripted<'a, W: World> {
@@ -84,6 +85,7 @@ impl<W: World> Scripted<'_, W> {
         let target = station.tip(goal);
         log.subgoals.push(SubGoalSample {
             feature: info.feature,
+            height: info.height,
             tool: station.tip(start),
             label: info.label,
             stage: info.stage,
@@ -147,6 +149,7 @@ impl<W: World> Scripted<'_, W> {
             stage: Stage::Picking,
             feature: centre,
             label: 0,
+            height: h,
         };
         self.run_stage(plan, free, Some(pick))?;
 
@@ -170,8 +173,9 @@ impl<W: World> Scripted<'_, W> {
         let plan = self.plan_stage(obs.joints, &placing, 0.0, carrying)?;
         let place = StageInfo {
             stage: Stage::Placing,
-            feature: task.box_top(s),
+            feature: task.slot_rim(s),
             label: s as u32 + 1,
+            height: h,
         };
         self.run_stage(plan, carrying, Some(place))?;
 
