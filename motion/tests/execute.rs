@@ -266,7 +266,7 @@ fn the_learned_loop_falls_back_to_rrt_connect_and_says_why() {
     assert!(
         report.fallbacks[3]
             .to_string()
-            .starts_with("placing D, sub-goal 1: 30 policy steps ended")
+            .starts_with("placing D, sub-goal 1: 40 policy steps ended")
     );
 }
 

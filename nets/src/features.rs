@@ -36,7 +36,7 @@ pub const NODE_FEATURES: usize = 4;
 /// their length (decimetres).
 pub const SLOT_FEATURES: usize = 3;
 /// The sub-goal planner's inputs ([`subgoal_input`]).
-pub const SUBGOAL_INPUTS: usize = 11;
+pub const SUBGOAL_INPUTS: usize = 10;
 /// The dynamics policy's inputs ([`action_input`]).
 pub const ACTION_INPUTS: usize = 5;
 /// Metres per radian of sub-goal azimuth in the planner's outputs: a
@@ -145,10 +145,14 @@ fn polar(p: [f32; 3], base: [f32; 3]) -> (f32, f32) {
     (dx.hypot(dy), dy.atan2(dx))
 }
 
-/// The sub-goal planner's input row: the feature's radius and height, the
-/// cup tip's, the turn from the tip's azimuth to the feature's (the
-/// shorter way), the product's height (decimetres), the stage and the
-/// sub-goal index one-hot.
+/// The sub-goal planner's input row: the cup tip's radius and height
+/// relative to the feature's, the feature's height over the table, the
+/// turn from the tip's azimuth to the feature's (the shorter way), the
+/// product's height (decimetres), the stage and the sub-goal index
+/// one-hot. Nothing says where the feature is around or away from the
+/// base: the expert's sub-goals do not depend on it, and a model that
+/// could not see it cannot learn to depend on it (a slot at a radius no
+/// demonstration used is planned for like the others).
 pub fn subgoal_input(q: &SubGoalQuery) -> [f32; SUBGOAL_INPUTS] {
     let (rf, af) = polar(q.feature, q.base);
     let (rt, at) = polar(q.tool, q.base);
@@ -157,16 +161,15 @@ pub fn subgoal_input(q: &SubGoalQuery) -> [f32; SUBGOAL_INPUTS] {
         Stage::Placing => 1,
     };
     let mut x = [0.0; SUBGOAL_INPUTS];
-    x[..6].copy_from_slice(&[
-        rf,
+    x[..5].copy_from_slice(&[
+        rt - rf,
+        q.tool[2] - q.feature[2],
         q.feature[2],
-        rt,
-        q.tool[2],
         wrap(af - at),
         10.0 * q.height,
     ]);
-    x[6 + stage] = 1.0;
-    x[8 + q.index.min(2)] = 1.0;
+    x[5 + stage] = 1.0;
+    x[7 + q.index.min(2)] = 1.0;
     x
 }
 

@@ -9,7 +9,7 @@ use crate::error::{PipelineError, Result};
 use crate::replay::{motion_examples, replay_all};
 use packwright_compiler::artifact::{DemonstrationRecord, Manifest, WorldFile};
 use packwright_interface::record::MotionLog;
-use packwright_interface::{SequenceRule, world::Seen};
+use packwright_interface::{Graph, SequenceRule, world::Seen};
 use packwright_motion::execute::demonstrated_decisions;
 use packwright_nets::{GraphExample, Task, TrainingSet};
 use std::collections::{BTreeMap, BTreeSet};
@@ -154,11 +154,15 @@ impl Lesson {
                 .collect();
             let decisions = demonstrated_decisions(&ep.task, &seen, &sequence, &self.sequence);
             for (graph, choice) in decisions.into_iter().filter(|_| taught) {
-                set.graphs.push(GraphExample {
+                let example = |graph: Graph| GraphExample {
                     target: choice.node.unwrap_or(graph.nodes.len()),
                     slot: choice.label.checked_sub(1),
                     graph,
-                });
+                };
+                if let Some(more) = with_more_selected(&graph, choice.node) {
+                    set.graphs.push(example(more));
+                }
+                set.graphs.push(example(graph));
             }
             if let Some(log) = log {
                 let (s, a) = motion_examples(log, ep.task.cell.base);
@@ -185,6 +189,29 @@ impl Lesson {
             demos: self.blocks.clone(),
         }
     }
+}
+
+/// A decision's graph with more products selected than its demonstration
+/// had, and the same answer under the rule: every unselected product that
+/// the rule reaches later (picking: after the chosen node in the chain;
+/// placing, `chosen` `None`: any) becomes a selected product still waiting
+/// (its goal the first slot). Demonstrations of n products never show a
+/// larger order; a reasoner taught only them chose a waiting product over
+/// the box while holding one, in orders of n + 1. `None` when no product
+/// is left to select.
+fn with_more_selected(graph: &Graph, chosen: Option<usize>) -> Option<Graph> {
+    let first = chosen.map_or(0, |c| c + 1);
+    let slot = *graph.slots.first()?;
+    let mut more = graph.clone();
+    let mut changed = false;
+    for node in more.nodes.iter_mut().skip(first) {
+        if !node.selected {
+            node.selected = true;
+            node.goal = [slot[0], slot[1], node.height / 2.0];
+            changed = true;
+        }
+    }
+    changed.then_some(more)
 }
 
 /// Share of the demonstrations a rule must explain to be taught.

@@ -24,8 +24,11 @@ use packwright_interface::{Graph, OrderTask, Policy, SequenceRule, SubGoalQuery,
 use packwright_kinematics::{Arm, Joints};
 use std::time::Instant;
 
+/// Via points of the vertical retreat from a release, when the straight
+/// joint motion up would touch the box.
+const RETREAT_VIAS: usize = 5;
 /// Most dynamics-policy steps per sub-goal.
-pub const MAX_POLICY_STEPS: usize = 30;
+pub const MAX_POLICY_STEPS: usize = 40;
 /// A sub-goal where the suction switches (the cup on a product's top
 /// face, a release in a slot) is reached when the cup tip is this close (m).
 pub const REACHED: f64 = 0.002;
@@ -278,19 +281,41 @@ impl<W: World> Learned<'_, W> {
         Ok(goals)
     }
 
-    /// Backs off straight up to `above` (the learned "above the slot"
-    /// sub-goal) from the released product `name`.
+    /// Backs off straight up to the height of `above` (the learned "above
+    /// the slot" sub-goal) from the released product `name`.
     fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<(), Failure> {
         let started = Instant::now();
         let load = Load::ignoring(name);
         let s = &self.station;
         let start = s.world.observe().joints;
+        // Straight up from where the cup let go: a learned "above" a few
+        // millimetres off in x or y would drag the cup along a wall.
+        let [x, y, _] = s.tip(&start);
         let up = SubGoal {
-            tip: above,
+            tip: [x, y, above[2]],
             suction: Suction::Keep,
         };
         let target = s.solve(&up, 1, &start, 0.0, load, above[2])?;
-        let samples = s.checked(1, start, &[target], load)?;
+        let samples = match s.checked(1, start, &[target], load) {
+            Ok(samples) => samples,
+            // A straight joint motion bows sideways; from a slot near a
+            // wall, go up a vertical line of via points instead.
+            Err(straight) => {
+                let z0 = s.tip(&start)[2];
+                let mut near = start;
+                let mut vias = Vec::new();
+                for i in 1..=RETREAT_VIAS {
+                    let z = z0 + (above[2] - z0) * i as f64 / RETREAT_VIAS as f64;
+                    let via = SubGoal {
+                        tip: [x, y, z],
+                        suction: Suction::Keep,
+                    };
+                    near = s.solve(&via, 1, &near, 0.0, load, z)?;
+                    vias.push(near);
+                }
+                s.checked(1, start, &vias, load).map_err(|_| straight)?
+            }
+        };
         self.station.clock.planning_s += started.elapsed().as_secs_f64();
         self.station.send(&samples, Suction::Keep)
     }

@@ -173,6 +173,15 @@ impl<'a, W: World> Station<'a, W> {
     }
 
     /// The joint path from `from` to `to` (both included) for sub-goal `k`.
+    ///
+    /// Both ways first try the straight joint-space motion and, when it
+    /// collides, a swing: the base turned alone with the arm's shape kept
+    /// (the wrist keeping the cup's yaw), then the rest of the motion, or
+    /// the rest first and the swing last. On a front-to-back swing the
+    /// straight line folds the wrist into the forearm half-way, where the
+    /// arm held in shape sweeps clear. The expert then gives up (its
+    /// straight motion's collision is reported when it is checked);
+    /// RRT-Connect searches.
     pub fn connect(
         &self,
         how: Connect,
@@ -181,6 +190,26 @@ impl<'a, W: World> Station<'a, W> {
         to: Joints,
         load: Load,
     ) -> Result<Vec<Joints>, Failure> {
+        let free = |a: &Joints, b: &Joints| {
+            self.checker
+                .check_motion(a, b, load.held, load.ignore)
+                .is_none()
+        };
+        if free(&from, &to) {
+            return Ok(vec![from, to]);
+        }
+        let turn = to[0] - from[0];
+        let mut swing_first = from;
+        swing_first[0] = to[0];
+        swing_first[5] += turn;
+        let mut swing_last = to;
+        swing_last[0] = from[0];
+        swing_last[5] -= turn;
+        for via in [swing_first, swing_last] {
+            if self.arm.within_limits(&via) && free(&from, &via) && free(&via, &to) {
+                return Ok(vec![from, via, to]);
+            }
+        }
         match how {
             Connect::Straight => Ok(vec![from, to]),
             Connect::Rrt { seed } => {
