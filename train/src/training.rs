@@ -132,7 +132,11 @@ fn binary(logits: Tensor<2>, one_hot: Tensor<2>) -> Tensor<1> {
 }
 
 /// The reasoner's loss: the cross-entropy of the choice (node or box),
-/// each choice output's own binary cross-entropy, and for placing samples
+/// the box output's own binary cross-entropy (holding or not is the
+/// box's alone to say; a node's is not: the same waiting product is the
+/// answer in one graph and not in the next, when an earlier one waits
+/// too, so a per-node binary loss fought the chain rule once orders grew
+/// past two products), and for placing samples
 /// the cross-entropy of the slot pointer (picking samples have no slot
 /// target: zeros add nothing).
 fn reasoner_loss(
@@ -141,8 +145,10 @@ fn reasoner_loss(
     target: Tensor<2>,
     slot_target: Tensor<2>,
 ) -> Tensor<1> {
-    cross_entropy(scores.clone(), target.clone())
-        + binary(scores, target)
+    let [_, w] = scores.dims();
+    let boxed = scores.clone().narrow(1, w - 1, 1);
+    cross_entropy(scores, target.clone())
+        + binary(boxed, target.narrow(1, w - 1, 1))
         + cross_entropy(slots, slot_target)
 }
 
@@ -180,7 +186,8 @@ fn reasoner_check(
     (loss, accuracy, parts)
 }
 
-/// The sub-goal planner's held-out negative log-likelihood, mean error
+/// The sub-goal planner's held-out loss (the mean's scaled squared error
+/// plus the negative log-likelihood), mean error
 /// (m, the decoded cup-tip position against the demonstrated one) and
 /// mean error per stage and sub-goal.
 fn subgoal_check(
@@ -191,10 +198,20 @@ fn subgoal_check(
 ) -> (f64, f64, BTreeMap<String, f64>) {
     let out = m.forward(x.clone(), None);
     let diff = y.clone() - out.mean.clone();
+    // The training objective without the KL term: the mean's squared
+    // error and the spread's likelihood (early stopping watches the mean).
+    let squared = diff
+        .clone()
+        .div_scalar(MEAN_SCALE)
+        .powf_scalar(2.0)
+        .sum_dim(1)
+        .mean()
+        * 0.5;
     let nll = scalar(
         (diff.div(out.log_std.clone().exp()).powf_scalar(2.0) * 0.5 + out.log_std)
             .sum_dim(1)
-            .mean(),
+            .mean()
+            + squared,
     );
     let means = out.mean.into_data().try_to_vec::<f32>().unwrap_or_default();
     let mut sums: BTreeMap<String, (f64, usize)> = BTreeMap::new();
@@ -259,6 +276,8 @@ fn fit<M: Module>(
     let mut best = (f64::INFINITY, 0usize, f64::NAN, f64::NAN, model.clone());
     let mut epochs_run = 0;
     let mut converged = false;
+    // The last epoch that improved the held-out loss by more than 0.1%.
+    let mut progressed = (f64::INFINITY, 0usize);
     // Past `config.epochs`, a network still improving goes on (at the
     // final learning rate) until a shorter plateau, up to twice as long.
     let most = 2 * config.epochs.max(1);
@@ -296,10 +315,20 @@ fn fit<M: Module>(
             valid_loss,
             valid_metric: metric,
         });
+        // A plateau: no improvement of more than 0.1% (and 1e-4) for
+        // `plateau` epochs (a loss that creeps down by less, as a
+        // cross-entropy whose answers are all right does, is not
+        // learning).
+        if !progressed.0.is_finite()
+            || valid_loss < progressed.0 - (1e-3 * progressed.0.abs() + 1e-4)
+        {
+            progressed = (valid_loss, epoch);
+        }
         if valid_loss < best.0 {
             best = (valid_loss, epoch, train_loss, metric, model.clone());
-        } else if epoch - best.1 >= plateau
-            || (epoch >= config.epochs && epoch - best.1 >= late_plateau)
+        }
+        if epoch - progressed.1 >= plateau
+            || (epoch >= config.epochs && epoch - progressed.1 >= late_plateau)
         {
             converged = true;
             break;
