@@ -10,7 +10,9 @@ use serde::{Deserialize, Serialize};
 pub struct ModelConfig {
     /// Width of the GraphSAGE embeddings.
     pub graph_hidden: usize,
-    /// Number of GraphSAGE layers.
+    /// Number of GraphSAGE layers (0: none; the box's score then reads
+    /// the max of the raw node inputs alone). README, "Learning", says
+    /// why the default is 0.
     pub graph_layers: usize,
     /// Width of the slot pointer's hidden layers.
     pub pointer_hidden: usize,
@@ -32,7 +34,7 @@ impl ModelConfig {
     pub fn new() -> ModelConfig {
         ModelConfig {
             graph_hidden: 32,
-            graph_layers: 3,
+            graph_layers: 0,
             pointer_hidden: 16,
             subgoal_hidden: 64,
             subgoal_latent: 4,

@@ -231,22 +231,24 @@ impl ReasonerWeights {
             self.node_hidden.apply_into(x, m, out);
             out[..m * k].iter_mut().for_each(|v| *v = v.max(0.0));
             self.node_score.apply_into(&out[..m * k], m, &mut scores);
-            // The box: max of the embeddings (>= 0) and of the raw inputs.
-            let pooled = &mut pooled[..w + NODE_FEATURES];
+            // The box: max of the embeddings (>= 0; when there are
+            // GraphSAGE layers) and of the raw inputs.
+            let e = if self.layers.is_empty() { 0 } else { w };
+            let pooled = &mut pooled[..e + NODE_FEATURES];
             pooled.fill(f32::NEG_INFINITY);
-            for row in h[..m * w].chunks_exact(w) {
+            for row in h[..m * w].chunks_exact(w).filter(|_| e > 0) {
                 for (p, v) in pooled.iter_mut().zip(row) {
                     *p = p.max(*v);
                 }
             }
             for row in x.chunks_exact(NODE_FEATURES) {
-                for (p, v) in pooled[w..].iter_mut().zip(row) {
+                for (p, v) in pooled[e..].iter_mut().zip(row) {
                     *p = p.max(*v);
                 }
             }
             if m == 0 {
-                pooled.fill(0.0);
-                pooled[w..].fill(-1e3);
+                pooled[..e].fill(0.0);
+                pooled[e..].fill(-1e3);
             }
             let hidden = &mut hidden[..self.box_hidden.outputs];
             self.box_hidden.apply_into(pooled, 1, hidden);

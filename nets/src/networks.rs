@@ -33,6 +33,16 @@ pub struct Networks {
     weights: Weights,
 }
 
+/// The box score's inputs: the max of the raw node inputs, after the max
+/// of the GraphSAGE embeddings when there are layers.
+pub fn box_inputs(c: &ModelConfig) -> usize {
+    if c.graph_layers == 0 {
+        NODE_FEATURES
+    } else {
+        c.graph_hidden + NODE_FEATURES
+    }
+}
+
 /// One weights file, read tensor by tensor.
 struct File<'a> {
     name: &'static str,
@@ -152,7 +162,7 @@ impl Networks {
             c.subgoal_latent,
             c.dynamics_hidden,
         ];
-        if widths.iter().any(|&w| w == 0 || w > 4096) || !(1..=64).contains(&c.graph_layers) {
+        if widths.iter().any(|&w| w == 0 || w > 4096) || c.graph_layers > 64 {
             return Err(ModelError::Architecture);
         }
         let (h, k) = (c.graph_hidden, c.pointer_hidden);
@@ -170,7 +180,7 @@ impl Networks {
             layers,
             node_hidden: r.dense("node_hidden", NODE_FEATURES, h)?,
             node_score: r.dense("node_score", h, 1)?,
-            box_hidden: r.dense("box_hidden", h + NODE_FEATURES, h)?,
+            box_hidden: r.dense("box_hidden", box_inputs(c), h)?,
             box_score: r.dense("box_score", h, 1)?,
             pointer: denses(&r, "pointer", &[(SLOT_FEATURES, k), (k, k), (k, 1)])?,
         };

@@ -10,6 +10,7 @@ use packwright_nets::features::{ACTION_INPUTS, NODE_FEATURES, SLOT_FEATURES, SUB
 use packwright_nets::forward::{
     Dense, DynamicsWeights, ReasonerWeights, SageWeights, SubGoalWeights,
 };
+use packwright_nets::networks::box_inputs;
 
 fn linear(i: usize, o: usize, device: &Device) -> Linear {
     LinearConfig::new(i, o).init(device)
@@ -100,7 +101,7 @@ impl Reasoner {
             layers,
             node_hidden: linear(NODE_FEATURES, h, device),
             node_score: linear(h, 1, device),
-            box_hidden: linear(h + NODE_FEATURES, h, device),
+            box_hidden: linear(box_inputs(c), h, device),
             box_score: linear(h, 1, device),
             pointer: vec![
                 linear(SLOT_FEATURES, k, device),
@@ -134,7 +135,11 @@ impl Reasoner {
         let raw_max = (nodes + (mask - 1.0) * 1e3)
             .max_dim(1)
             .reshape([b, NODE_FEATURES]);
-        let pooled = Tensor::cat(vec![max, raw_max], 1);
+        let pooled = if self.layers.is_empty() {
+            raw_max
+        } else {
+            Tensor::cat(vec![max, raw_max], 1)
+        };
         let boxed = self
             .box_score
             .forward(relu(self.box_hidden.forward(pooled)));

@@ -118,7 +118,21 @@ mod tests {
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
         let device = Device::flex();
-        let c = ModelConfig::new();
+        // The default (no GraphSAGE layers) and three layers.
+        for layers in [0, 3] {
+            same_answers(
+                &ModelConfig {
+                    graph_layers: layers,
+                    ..ModelConfig::new()
+                },
+                &device,
+            );
+        }
+    }
+
+    fn same_answers(c: &ModelConfig, device: &Device) {
+        let device = device.clone();
+        let c = c.clone();
         let trained = Trained::new(
             c.clone(),
             TrainConfig::default(),

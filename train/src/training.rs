@@ -327,7 +327,12 @@ fn fit<M: Module>(
         if valid_loss < best.0 {
             best = (valid_loss, epoch, train_loss, metric, model.clone());
         }
-        if epoch - progressed.1 >= plateau
+        // A reasoner whose held-out decisions are all right, with a loss
+        // below 1e-3, has nothing left to learn (its cross-entropy would
+        // creep down for hundreds of epochs).
+        let learnt = name == Network::Reasoner && metric >= 1.0 && valid_loss < 1e-3;
+        if learnt
+            || epoch - progressed.1 >= plateau
             || (epoch >= config.epochs && epoch - progressed.1 >= late_plateau)
         {
             converged = true;
