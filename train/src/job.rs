@@ -146,7 +146,8 @@ pub fn weaknesses(metrics: &[(Network, &NetworkMetrics)], dagger_rounds: usize) 
         }
         // The dynamics policy's figures are its last DAgger round's, a
         // short fine-tuning on a growing set: not a convergence measure.
-        if !m.converged && !(network == Network::Dynamics && dagger_rounds > 0) {
+        let fine_tuned = network == Network::Dynamics && dagger_rounds > 0;
+        if !m.converged && !fine_tuned {
             out.push(Weakness::NotConverged {
                 network: network.to_string(),
                 epochs: m.epochs_run,
