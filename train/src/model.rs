@@ -129,15 +129,15 @@ impl Reasoner {
             .forward(relu(self.node_hidden.forward(nodes.clone())))
             .reshape([b, m]);
         let width = h.dims()[2];
-        // Embeddings are >= 0 (ReLU) and padding is 0, so the max over all
-        // columns is the max over the present nodes.
-        let max = h.max_dim(1).reshape([b, width]);
         let raw_max = (nodes + (mask - 1.0) * 1e3)
             .max_dim(1)
             .reshape([b, NODE_FEATURES]);
         let pooled = if self.layers.is_empty() {
             raw_max
         } else {
+            // Embeddings are >= 0 (ReLU) and padding is 0, so the max over
+            // all columns is the max over the present nodes.
+            let max = h.max_dim(1).reshape([b, width]);
             Tensor::cat(vec![max, raw_max], 1)
         };
         let boxed = self

@@ -192,11 +192,11 @@ impl<W: World> Learned<'_, W> {
     fn stage(&mut self, plan: &StagePlan) -> Result<[[f64; 3]; 3], Failure> {
         let mut fallen = false;
         let mut goals = [[0.0; 3]; 3];
+        let base = f32s(self.station.task.cell.base);
         for (k, switch) in schedule(plan.stage).into_iter().enumerate() {
             let start = self.station.world.observe().joints;
             let started = Instant::now();
             let tool = f32s(self.station.tip(&start));
-            let base = f32s(self.station.task.cell.base);
             let mut goal = self
                 .policy
                 .subgoal(&SubGoalQuery {
@@ -290,7 +290,7 @@ impl<W: World> Learned<'_, W> {
         let start = s.world.observe().joints;
         // Straight up from where the cup let go: a learned "above" a few
         // millimetres off in x or y would drag the cup along a wall.
-        let [x, y, _] = s.tip(&start);
+        let [x, y, z0] = s.tip(&start);
         let up = SubGoal {
             tip: [x, y, above[2]],
             suction: Suction::Keep,
@@ -301,7 +301,6 @@ impl<W: World> Learned<'_, W> {
             // A straight joint motion bows sideways; from a slot near a
             // wall, go up a vertical line of via points instead.
             Err(straight) => {
-                let z0 = s.tip(&start)[2];
                 let mut near = start;
                 let mut vias = Vec::new();
                 for i in 1..=RETREAT_VIAS {
