@@ -5,6 +5,7 @@ use crate::error::Error;
 use crate::source::{Loc, SourceMap};
 use serde::Serialize;
 use std::fmt::Write;
+use unicode_width::UnicodeWidthChar;
 
 /// Renders one error as text, in the style of rustc:
 ///
@@ -49,15 +50,24 @@ fn snippet(out: &mut String, sources: &SourceMap, at: Loc, label: &str) {
     let _ = writeln!(out, "{pad}--> {}:{line}:{col}", file.path.display());
     let _ = writeln!(out, "{pad} |");
     let _ = writeln!(out, "{number} | {text}");
-    // Carets under the span's part on this line (at least one).
+    // Carets under the span's part on this line (at least one), in
+    // terminal columns: a wide character (CJK, most emoji) takes two, a
+    // combining mark none; tabs are copied so that they line up.
     let start_char = col - 1;
     let span_text = file.text.get(at.span.range()).unwrap_or("");
     let on_line = span_text.split('\n').next().unwrap_or("");
-    let width = on_line.chars().count().max(1);
+    let width = on_line
+        .chars()
+        .map(|c| c.width().unwrap_or(0))
+        .sum::<usize>()
+        .max(1);
     let lead: String = text
         .chars()
         .take(start_char)
-        .map(|c| if c == '\t' { '\t' } else { ' ' })
+        .map(|c| match c {
+            '\t' => "\t".to_owned(),
+            c => " ".repeat(c.width().unwrap_or(0)),
+        })
         .collect();
     let carets = "^".repeat(width);
     if label.is_empty() {

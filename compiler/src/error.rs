@@ -366,7 +366,7 @@ impl Error {
             Error::RangesTooLarge { .. } => "lower one of the two upper bounds".into(),
             Error::JitterImpossible { .. } => "lower the jitter, space the products further apart, or enlarge the pending area".into(),
             Error::KeepsNothing { .. } => "raise `keep`".into(),
-            Error::TooManyConfigurations { .. } => "choose fewer products or slots, or lower `keep`".into(),
+            Error::TooManyConfigurations { .. } => "generate fewer: `choose` fewer products or slots, `keep` a smaller share of the combinations (counted after `keep`), a lower `repeat`, or (scenarios) a lower `count`".into(),
             Error::SequenceMismatch {
                 left_out,
                 not_selected,

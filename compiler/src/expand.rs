@@ -198,33 +198,66 @@ pub fn arrangements(n: usize, k: usize) -> Vec<Vec<usize>> {
     out
 }
 
-/// C(n, k) x n!/(n-k)! without overflow (saturating).
-fn count_configurations(products: usize, slots: usize, n: usize) -> u128 {
+/// C(products, n): the product combinations (saturating).
+fn combination_count(products: usize, n: usize) -> u128 {
     let mut c: u128 = 1;
     for i in 0..n as u128 {
         c = c.saturating_mul(products as u128 - i) / (i + 1);
     }
-    let mut p: u128 = 1;
-    for i in 0..n as u128 {
-        p = p.saturating_mul(slots as u128 - i);
+    c
+}
+
+/// slots!/(slots-n)!: the ways to put n products into the slots
+/// (saturating).
+fn arrangement_count(slots: usize, n: usize) -> u128 {
+    (0..n as u128).fold(1u128, |p, i| p.saturating_mul(slots as u128 - i))
+}
+
+/// C(products, n) x slots!/(slots-n)!: every goal configuration
+/// (saturating).
+fn count_configurations(products: usize, slots: usize, n: usize) -> u128 {
+    combination_count(products, n).saturating_mul(arrangement_count(slots, n))
+}
+
+/// How many demonstrations a block generates once `keep` has chosen its
+/// combinations, counted before anything is generated; an error at the
+/// statement that made the count too large: `repeat` when it alone tips
+/// the count over the limit, else `choose`. The combinations are listed
+/// to choose from, so their number is bounded too.
+fn kept_count(d: &DemosDef) -> Result<(usize, usize), Error> {
+    let c = &d.choose;
+    let too_many = |at: Loc, count: u128| Error::TooManyConfigurations {
+        at,
+        count: count.to_string(),
+        limit: MAX_GENERATED,
+    };
+    let n_combos = combination_count(c.entries.len(), c.n);
+    if n_combos > MAX_GENERATED as u128 {
+        let all = count_configurations(c.entries.len(), c.slots.len(), c.n);
+        return Err(too_many(c.loc, all.saturating_mul(d.repeat as u128)));
     }
-    c.saturating_mul(p)
+    let n_combos = n_combos as usize;
+    let keep = ((d.keep * n_combos as f64).round() as usize).min(n_combos);
+    let per_combo = arrangement_count(c.slots.len(), c.n);
+    let once = (keep as u128).saturating_mul(per_combo);
+    let total = once.saturating_mul(d.repeat as u128);
+    if total > MAX_GENERATED as u128 {
+        let at = match d.repeat_loc {
+            Some(at) if once <= MAX_GENERATED as u128 => at,
+            _ => c.loc,
+        };
+        return Err(too_many(at, total));
+    }
+    Ok((n_combos, keep))
 }
 
 fn demo_set(m: &Model, d: &DemosDef, out: &mut Expanded) -> Result<(), Error> {
     let c = &d.choose;
+    let (n_combos, keep) = kept_count(d)?;
     let total = count_configurations(c.entries.len(), c.slots.len(), c.n);
-    if total.saturating_mul(d.repeat as u128) > MAX_GENERATED as u128 {
-        return Err(Error::TooManyConfigurations {
-            at: c.loc,
-            count: total.saturating_mul(d.repeat as u128).to_string(),
-            limit: MAX_GENERATED,
-        });
-    }
     let mut rng = ChaCha8Rng::seed_from_u64(d.seed);
     let combos = combinations(c.entries.len(), c.n);
-    let n_combos = combos.len();
-    let keep = ((d.keep * n_combos as f64).round() as usize).min(n_combos);
+    debug_assert_eq!(combos.len(), n_combos);
     if keep == 0 {
         return Err(Error::KeepsNothing {
             at: c.loc,
@@ -452,7 +485,7 @@ fn scenario(m: &Model, s: &ScenarioDef) -> Result<Suite, Error> {
 fn scenario_set(m: &Model, s: &ScenariosDef) -> Result<Suite, Error> {
     if s.count as u64 > MAX_GENERATED {
         return Err(Error::TooManyConfigurations {
-            at: s.loc,
+            at: s.count_loc,
             count: s.count.to_string(),
             limit: MAX_GENERATED,
         });
@@ -500,6 +533,8 @@ fn scenario_set(m: &Model, s: &ScenariosDef) -> Result<Suite, Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::source::FileId;
+    use packwright_grammar::Span;
 
     #[test]
     fn combinatorics() {
@@ -515,5 +550,67 @@ mod tests {
         assert_eq!(count_configurations(5, 4, 4), 120);
         assert_eq!(count_configurations(3, 3, 2), 18);
         assert!(combinations(2, 3).is_empty());
+    }
+
+    /// A block of `choose n of products into slots`, with `keep` and
+    /// `repeat`; its statements at distinct places.
+    fn block(n: usize, products: usize, slots: usize, keep: f64, repeat: usize) -> DemosDef {
+        let at = |start: usize| Loc::new(FileId(0), Span::new(start, start + 1));
+        DemosDef {
+            name: "d".into(),
+            loc: at(0),
+            inventory: 0,
+            choose: Choose {
+                n,
+                entries: (0..products).collect(),
+                slots: (0..slots).collect(),
+                loc: at(10),
+            },
+            keep,
+            jitter: 0.0,
+            jitter_loc: None,
+            sequence: SequenceMode::Ascending,
+            repeat,
+            repeat_loc: (repeat > 1).then(|| at(20)),
+            seed: 0,
+            human: CountRange {
+                low: 0,
+                high: 0,
+                loc: None,
+            },
+            missing: CountRange {
+                low: 0,
+                high: 0,
+                loc: None,
+            },
+        }
+    }
+
+    /// The limit counts what `keep` leaves; the caret goes to `repeat`
+    /// when it alone tips the count over, else to `choose`; a number of
+    /// combinations too large to list is refused before listing them.
+    #[test]
+    fn the_limit_counts_what_keep_leaves_and_blames_the_right_statement() {
+        let at = |e: Error| e.at().map(|l| l.span.start);
+        // 4 of 24 into 5 slots: 10,626 combinations x 120 = 1,275,120.
+        assert_eq!(
+            at(kept_count(&block(4, 24, 5, 1.0, 1)).unwrap_err()),
+            Some(10)
+        );
+        assert_eq!(
+            kept_count(&block(4, 24, 5, 0.5, 1)).ok(),
+            Some((10_626, 5_313))
+        );
+        // 3 of 5 into 5 slots: 600 configurations, 2,000 times each.
+        assert_eq!(
+            at(kept_count(&block(3, 5, 5, 1.0, 2_000)).unwrap_err()),
+            Some(20)
+        );
+        assert!(kept_count(&block(3, 5, 5, 1.0, 1_000)).is_ok());
+        // 10 of 60: 75 billion combinations, never listed.
+        assert_eq!(
+            at(kept_count(&block(10, 60, 10, 0.000_001, 1)).unwrap_err()),
+            Some(10)
+        );
     }
 }

@@ -12,6 +12,10 @@ use packwright_grammar::ast::SequenceMode;
 
 /// Lift height when a cell gives none.
 pub const DEFAULT_LIFT: f64 = 0.150;
+/// The suction cup lengths a cell may declare (m, flange to cup tip).
+pub const SUCTION_RANGE: (f64, f64) = (0.020, 0.300);
+/// The lift heights a cell may declare (m).
+pub const LIFT_RANGE: (f64, f64) = (0.020, 0.500);
 /// UR10 reach, measured horizontally from the base axis.
 pub const UR10_REACH_MIN: f64 = 0.20;
 pub const UR10_REACH_MAX: f64 = 1.30;
@@ -219,6 +223,8 @@ pub struct DemosDef {
     pub jitter_loc: Option<Loc>,
     pub sequence: SequenceMode,
     pub repeat: usize,
+    /// Where `repeat` was written, if it was.
+    pub repeat_loc: Option<Loc>,
     pub seed: u64,
     pub human: CountRange,
     pub missing: CountRange,
@@ -248,5 +254,7 @@ pub struct ScenariosDef {
     pub jitter: f64,
     pub jitter_loc: Option<Loc>,
     pub count: usize,
+    /// Where `count` was written.
+    pub count_loc: Loc,
     pub seed: u64,
 }

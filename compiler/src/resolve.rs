@@ -244,6 +244,22 @@ impl Resolver<'_> {
         false
     }
 
+    /// Whether `value` (m) lies within `range` (m); else an error naming
+    /// `what`, the range, and `why` the range.
+    fn bounded(&mut self, value: f64, at: Loc, what: &str, range: (f64, f64), why: &str) -> bool {
+        let (lo, hi) = range;
+        if (lo..=hi).contains(&value) {
+            return true;
+        }
+        let mm = |v: f64| format!("{:.0} mm", v * 1000.0);
+        self.errors.push(Error::BadGeometry {
+            at,
+            what: format!("{what} must be between {} and {}", mm(lo), mm(hi)),
+            fix: format!("write a length from {} to {}: {why}", mm(lo), mm(hi)),
+        });
+        false
+    }
+
     /// A position on the table: `(x, y)`, or `(x, y, 0)`. Products stand
     /// on the table and box floors lie on it, so another height is an error.
     fn table_point(&mut self, p: &ast::Point, f: FileId) -> [f64; 2] {
@@ -304,11 +320,23 @@ impl Resolver<'_> {
                     base.set([p.x.metres, p.y.metres, z], sl, &mut self.errors);
                 }
                 ast::CellStmt::Suction(l) => {
-                    ok &= self.positive(l.metres, Loc::new(f, l.span), "the suction cup's length");
+                    ok &= self.bounded(
+                        l.metres,
+                        Loc::new(f, l.span),
+                        "the suction cup's length (flange to cup tip)",
+                        SUCTION_RANGE,
+                        "a longer cup puts the sub-goals out of the arm's reach, a shorter one brings the wrist against the products",
+                    );
                     suction.set(l.metres, sl, &mut self.errors);
                 }
                 ast::CellStmt::Lift(l) => {
-                    ok &= self.positive(l.metres, Loc::new(f, l.span), "the lift height");
+                    ok &= self.bounded(
+                        l.metres,
+                        Loc::new(f, l.span),
+                        "the lift height",
+                        LIFT_RANGE,
+                        "a lower lift drags the product over the table, a higher one carries it out of the arm's reach",
+                    );
                     lift.set(l.metres, sl, &mut self.errors);
                 }
                 ast::CellStmt::Pending(a, b) => {
@@ -979,6 +1007,7 @@ impl Resolver<'_> {
         let block = Loc::new(f, d.span);
         let item = format!("demos block `{}`", d.name.text);
         let jitter_loc = jitter.loc();
+        let repeat_loc = repeat.loc();
         let Some((choose, human, missing)) =
             self.generator(inv, block, item, choose, human, missing)
         else {
@@ -999,6 +1028,7 @@ impl Resolver<'_> {
             jitter_loc,
             sequence: sequence.get().unwrap_or(SequenceMode::Ascending),
             repeat: repeat.get().unwrap_or(1),
+            repeat_loc,
             seed: seed.get().unwrap_or(0),
             human,
             missing,
@@ -1114,6 +1144,7 @@ impl Resolver<'_> {
         let block = Loc::new(f, s.span);
         let item = format!("scenarios block `{}`", s.name.text);
         let jitter_loc = jitter.loc();
+        let count_loc = count.loc();
         let count = count.required(block, item.clone(), "count 100", &mut self.errors);
         let Some((choose, human, missing)) =
             self.generator(inv, block, item, choose, human, missing)
@@ -1138,6 +1169,7 @@ impl Resolver<'_> {
             jitter: jitter.get().unwrap_or(0.0),
             jitter_loc,
             count,
+            count_loc: count_loc.unwrap_or(block),
             seed: seed.get().unwrap_or(0),
         });
     }
