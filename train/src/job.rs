@@ -147,7 +147,11 @@ pub fn weaknesses(metrics: &[(Network, &NetworkMetrics)], dagger_rounds: usize) 
         // The dynamics policy's figures are its last DAgger round's, a
         // short fine-tuning on a growing set: not a convergence measure.
         let fine_tuned = network == Network::Dynamics && dagger_rounds > 0;
-        if !m.converged && !fine_tuned {
+        // A reasoner right on every held-out decision whose loss still
+        // falls is only sharpening its margins: more epochs change no
+        // decision, so "raise --epochs" would mislead.
+        let perfect = network == Network::Reasoner && m.valid_metric >= 1.0;
+        if !m.converged && !fine_tuned && !perfect {
             out.push(Weakness::NotConverged {
                 network: network.to_string(),
                 epochs: m.epochs_run,
@@ -249,4 +253,66 @@ pub fn run(
         warnings,
     };
     Ok((trained, report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
+
+    fn metrics(valid_metric: f64, converged: bool) -> NetworkMetrics {
+        NetworkMetrics {
+            train_samples: 100,
+            valid_samples: 20,
+            epochs_run: 600,
+            best_epoch: 600,
+            train_loss: 0.01,
+            valid_loss: 0.01,
+            valid_metric,
+            metric: "held-out".to_owned(),
+            parts: BTreeMap::from([("picking".to_owned(), valid_metric)]),
+            converged,
+            seconds: 1.0,
+        }
+    }
+
+    /// A reasoner still improving at its epoch limit is reported unless it
+    /// is already right on every held-out decision; the sub-goal planner
+    /// always is, the dynamics policy only without DAgger.
+    #[test]
+    fn not_converged_is_reported_where_more_epochs_could_help() {
+        let (perfect, weak) = (metrics(1.0, false), metrics(0.995, false));
+        let subgoal = metrics(0.002, false);
+        let dynamics = metrics(0.05, false);
+        let found = weaknesses(
+            &[
+                (Network::Reasoner, &perfect),
+                (Network::SubGoal, &subgoal),
+                (Network::Dynamics, &dynamics),
+            ],
+            2,
+        );
+        assert_eq!(
+            found,
+            vec![Weakness::NotConverged {
+                network: Network::SubGoal.to_string(),
+                epochs: 600,
+            }]
+        );
+        let found = weaknesses(
+            &[(Network::Reasoner, &weak), (Network::Dynamics, &dynamics)],
+            0,
+        );
+        let networks: Vec<String> = found
+            .iter()
+            .filter_map(|w| match w {
+                Weakness::NotConverged { network, .. } => Some(network.clone()),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(
+            networks,
+            vec![Network::Reasoner.to_string(), Network::Dynamics.to_string()]
+        );
+    }
 }
