@@ -4,8 +4,10 @@
 //! slot no demonstration used, and one product more than taught. gen_103
 //! has its box behind a robot on a 280 mm riser and was taught in
 //! descending order; gen_101 has its box on the left and was taught a
-//! listed priority. These seeds are development seeds, not the README's
-//! reported family.
+//! listed priority; gen_5 has its box and products on opposite sides (the
+//! swing back from the box is 180 degrees). The learned planner must pack
+//! them without falling back to RRT-Connect too. These seeds are
+//! development seeds, not the README's reported family.
 
 mod common;
 use common::{packwright, scratch};
@@ -91,6 +93,11 @@ fn learns_cell(seed: u64) {
         assert_eq!(reasoner, 1.0, "{name}: reasoner SR {reasoner}: {row}");
         let sr = row["sr"]["rate"].as_f64().unwrap_or(0.0);
         assert!(sr >= 5.0 / 6.0, "{name}: SR {sr}: {row}");
+        let alone = row["sr_no_fallback"]["rate"].as_f64().unwrap_or(0.0);
+        assert!(
+            alone >= 5.0 / 6.0,
+            "{name}: SR without fallback {alone}: {row}"
+        );
     }
     let _ = fs::remove_dir_all(&dir);
 }
@@ -103,4 +110,9 @@ fn a_model_generalises_on_a_cell_with_its_box_behind_the_robot() {
 #[test]
 fn a_model_generalises_on_a_cell_taught_a_priority_list() {
     learns_cell(101);
+}
+
+#[test]
+fn a_model_generalises_on_a_cell_with_box_and_products_on_opposite_sides() {
+    learns_cell(5);
 }

@@ -16,9 +16,15 @@ pub struct Limits {
     pub jerk: f64,
 }
 
+impl Limits {
+    /// Whether position `v` is within the range (1e-9 rad of slack for
+    /// rounding).
+    pub fn contains(&self, v: f64) -> bool {
+        v >= self.lower - 1e-9 && v <= self.upper + 1e-9
+    }
+}
+
 /// Whether `q` is within `limits` (1e-9 rad of slack for rounding).
 pub fn within(limits: &[Limits; DOF], q: &Joints) -> bool {
-    q.iter()
-        .zip(limits)
-        .all(|(v, l)| *v >= l.lower - 1e-9 && *v <= l.upper + 1e-9)
+    q.iter().zip(limits).all(|(v, l)| l.contains(*v))
 }

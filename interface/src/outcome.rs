@@ -193,9 +193,12 @@ impl fmt::Display for Outcome {
 pub enum Shortfall {
     /// The step budget (`steps`) ended this far (m) from the sub-goal.
     Short { steps: usize, distance_m: f64 },
-    /// A step would leave the joint limits (or the wrist could not keep
-    /// the cup down).
-    Limits,
+    /// A step would take `joint` (from 0, base first) to `value` (rad),
+    /// outside its limits; `joint` is `None` when the wrist could not keep
+    /// the cup down.
+    Limits { joint: Option<usize>, value: f64 },
+    /// The smoother refused the steps (its reason, for people).
+    Smoothing { reason: String },
     /// The motion would collide.
     Collides { hit: Hit },
 }
@@ -205,7 +208,14 @@ impl Shortfall {
     pub fn kind(&self) -> &'static str {
         match self {
             Shortfall::Short { .. } => "short",
-            Shortfall::Limits => "joint limits",
+            Shortfall::Limits { joint: Some(0), .. } => "base joint limit",
+            Shortfall::Limits { joint: Some(1), .. } => "shoulder joint limit",
+            Shortfall::Limits { joint: Some(2), .. } => "elbow joint limit",
+            Shortfall::Limits { joint: Some(3), .. } => "wrist 1 joint limit",
+            Shortfall::Limits { joint: Some(4), .. } => "wrist 2 joint limit",
+            Shortfall::Limits { joint: Some(5), .. } => "wrist 3 joint limit",
+            Shortfall::Limits { .. } => "cup not kept down",
+            Shortfall::Smoothing { .. } => "smoothing",
             Shortfall::Collides { .. } => "would collide",
         }
     }
@@ -219,7 +229,19 @@ impl fmt::Display for Shortfall {
                 "{steps} policy steps ended {:.1} mm away",
                 distance_m * 1e3
             ),
-            Shortfall::Limits => write!(f, "a policy step would leave the joint limits"),
+            Shortfall::Limits {
+                joint: Some(j),
+                value,
+            } => write!(
+                f,
+                "a policy step would take joint {j} to {value:.3} rad, outside its limits"
+            ),
+            Shortfall::Limits { joint: None, .. } => {
+                write!(f, "a policy step would not keep the cup pointing down")
+            }
+            Shortfall::Smoothing { reason } => {
+                write!(f, "the smoother refused the policy's steps ({reason})")
+            }
             Shortfall::Collides { hit } => write!(f, "the policy's motion would collide ({hit})"),
         }
     }

@@ -68,9 +68,23 @@ pub fn spread(len: usize, n: usize) -> Vec<usize> {
 /// The expert's action at `q` towards `goal`: the base, shoulder and elbow
 /// differences, scaled down together so that none exceeds
 /// ±[`MAX_ACTION`] (the step stays on the straight joint-space line the
-/// expert moves along).
+/// expert moves along). The base turns the short way (its difference
+/// within ±π): the policy's rollouts turn the base freely and bring the
+/// end into the limits after (the same pose), so the long way round a
+/// limit is the same motion, and one state never has two labels.
 pub fn action(q: &Joints, goal: &Joints) -> [f64; 3] {
-    clip([goal[0] - q[0], goal[1] - q[1], goal[2] - q[2]])
+    clip([short_way(goal[0] - q[0]), goal[1] - q[1], goal[2] - q[2]])
+}
+
+/// `turn` plus the multiple of 2π that puts it within (−π, π].
+pub fn short_way(turn: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let wrapped = turn - TAU * (turn / TAU).round();
+    if wrapped <= -PI {
+        wrapped + TAU
+    } else {
+        wrapped
+    }
 }
 
 /// `step` scaled down, direction kept, so that no joint moves more than
@@ -98,5 +112,25 @@ mod tests {
         assert_eq!(a, [MAX_ACTION, -0.01 * MAX_ACTION, -MAX_ACTION]);
         let small = action(&[0.0; 6], &[0.01, -0.02, 0.03, 1.0, 1.0, 1.0]);
         assert_eq!(small, [0.01, -0.02, 0.03]);
+    }
+
+    #[test]
+    fn the_base_turns_the_short_way() {
+        use std::f64::consts::{PI, TAU};
+        for (turn, short) in [
+            (0.3, 0.3),
+            (-0.3, -0.3),
+            (PI, PI),
+            (-PI, PI),
+            (3.5, 3.5 - TAU),
+            (-3.5, TAU - 3.5),
+            (10.0, 10.0 - 2.0 * TAU),
+        ] {
+            assert!((short_way(turn) - short).abs() < 1e-12, "{turn}");
+        }
+        // A turn of 200 degrees to the goal is a step back towards it the
+        // other way (the same pose, 160 degrees away).
+        let a = action(&[0.0; 6], &[200f64.to_radians(), 0.0, 0.0, 0.0, 0.0, 0.0]);
+        assert_eq!(a, [-MAX_ACTION, 0.0, 0.0]);
     }
 }

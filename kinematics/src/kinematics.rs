@@ -290,6 +290,22 @@ fn nearest(candidates: impl IntoIterator<Item = Joints>, near: &Joints) -> Optio
         .map(|(_, q)| q)
 }
 
+impl Arm {
+    /// The same pose as `q` within the joint limits: each joint already
+    /// within its limits is kept, each other one is turned by the multiple
+    /// of 2π (every joint is revolute) that brings it within its limits
+    /// nearest `near`; `None` when no turn fits.
+    pub fn into_limits(&self, q: &Joints, near: &Joints) -> Option<Joints> {
+        let mut out = *q;
+        for (i, l) in self.limits.iter().enumerate() {
+            if !l.contains(q[i]) {
+                out[i] = wrap_near(q[i], near[i], l)?;
+            }
+        }
+        Some(out)
+    }
+}
+
 /// Each joint at the 2π turn nearest `near` within its limits.
 fn wrap_all(q: &Joints, near: &Joints, limits: &[Limits; DOF]) -> Option<Joints> {
     let mut out = [0.0; DOF];

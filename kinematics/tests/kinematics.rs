@@ -219,3 +219,31 @@ proptest! {
         check_total(&arm, q, near, p, yaw, suction)?;
     }
 }
+
+proptest! {
+    #![proptest_config(config(300))]
+    /// A configuration turned past its limits by whole turns is brought
+    /// back within them, the same pose, and the joints within their limits
+    /// are kept.
+    #[test]
+    fn into_limits_keeps_the_pose(
+        seed in any::<u64>(),
+        turns in prop::array::uniform6(-2i32..=2),
+    ) {
+        let arm = Arm::ur10();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let q = random_joints(&arm, &mut rng);
+        let near = random_joints(&arm, &mut rng);
+        let turned: Joints = std::array::from_fn(|i| q[i] + f64::from(turns[i]) * TAU);
+        let back = arm.into_limits(&turned, &near).expect("a whole turn back fits");
+        prop_assert!(arm.within_limits(&back));
+        for i in 0..DOF {
+            if arm.limits[i].contains(turned[i]) {
+                prop_assert_eq!(back[i], turned[i]);
+            }
+        }
+        let (a, b) = (arm.flange_pose(&base(), &q), arm.flange_pose(&base(), &back));
+        close(a.translation.vector, b.translation.vector, 1e-9);
+        prop_assert!(a.rotation.angle_to(&b.rotation) < 1e-9);
+    }
+}

@@ -12,7 +12,7 @@
 //! it. A motion between two configurations is checked at joint steps of at
 //! most 1 degree.
 
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use packwright_interface::outcome::Hit;
 use packwright_interface::scene::CellScene;
 use packwright_interface::world::Body;
@@ -63,6 +63,22 @@ pub struct Held {
     pub size: [f64; 3],
     /// The product's centre pose in the flange frame.
     pub in_flange: Isometry3<f64>,
+}
+
+impl Held {
+    /// A product of `size` held by its top face under a cup `suction` long,
+    /// its centre `beside` the cup's axis (flange frame, m; zero when the
+    /// cup met the face at its centre), half its height below the tip.
+    pub fn under_cup(name: &str, size: [f64; 3], suction: f64, beside: Vector3<f64>) -> Held {
+        Held {
+            name: name.to_owned(),
+            size,
+            in_flange: Isometry3::from_parts(
+                (beside + Vector3::new(0.0, 0.0, suction + size[2] / 2.0)).into(),
+                UnitQuaternion::identity(),
+            ),
+        }
+    }
 }
 
 /// A product standing in the cell, for [`Checker::set_products`].

@@ -162,6 +162,17 @@ pub fn plan(query: &Query, start: Joints, goal: Joints, config: &RrtConfig) -> O
     if query.free(&start, &goal) {
         return Some(vec![start, goal]);
     }
+    search(query, start, goal, config)
+}
+
+/// RRT-Connect between two free configurations whose direct motion is
+/// already known to collide (no direct check, no end-point check).
+pub fn search(
+    query: &Query,
+    start: Joints,
+    goal: Joints,
+    config: &RrtConfig,
+) -> Option<Vec<Joints>> {
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
     // Sample within the limits, around the span of the query.
     let bounds: [(f64, f64); DOF] = std::array::from_fn(|j| {

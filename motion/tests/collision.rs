@@ -4,7 +4,7 @@
 mod common;
 use common::bench_cell;
 
-use nalgebra::{Isometry3, Point3};
+use nalgebra::{Isometry3, Point3, Vector3};
 use packwright_interface::outcome::Hit;
 use packwright_interface::world::Body;
 use packwright_kinematics::{Arm, Joints};
@@ -121,12 +121,12 @@ fn a_motion_through_an_obstacle_collides_between_free_ends() {
 fn a_held_product_collides_with_the_box_wall() {
     let arm = Arm::ur10();
     let checker = Checker::new(&arm, &bench_cell());
-    let held = Held {
-        name: "A".into(),
-        size: [0.05; 3],
-        // Hanging under the cup: centre half a height below the tip.
-        in_flange: Isometry3::translation(0.0, 0.0, 0.1 + 0.025),
-    };
+    // Hanging under a 0.1 m cup: centre half a height below the tip.
+    let held = Held::under_cup("A", [0.05; 3], 0.1, Vector3::zeros());
+    assert_eq!(
+        held.in_flange,
+        Isometry3::translation(0.0, 0.0, 0.1 + 0.025)
+    );
     // Above the slot: free.
     let above = ik(&arm, [0.0, 0.6, 0.25]);
     assert_eq!(checker.check(&above, Some(&held), None), None);

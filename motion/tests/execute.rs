@@ -263,11 +263,10 @@ fn the_learned_loop_falls_back_to_rrt_connect_and_says_why() {
         );
     }
     assert_eq!(report.fallbacks[0].product, "A");
-    assert!(
-        report.fallbacks[3]
-            .to_string()
-            .starts_with("placing D, sub-goal 1: 40 policy steps ended")
-    );
+    assert!(report.fallbacks[3].to_string().starts_with(&format!(
+        "placing D, sub-goal 1: {} policy steps ended",
+        execute::MAX_POLICY_STEPS
+    )));
 }
 
 /// A reasoner that picks a product the order does not select breaks the

@@ -236,9 +236,11 @@ impl ReasonerWeights {
             let e = if self.layers.is_empty() { 0 } else { w };
             let pooled = &mut pooled[..e + NODE_FEATURES];
             pooled.fill(f32::NEG_INFINITY);
-            for row in h[..m * w].chunks_exact(w).filter(|_| e > 0) {
-                for (p, v) in pooled.iter_mut().zip(row) {
-                    *p = p.max(*v);
+            if e > 0 {
+                for row in h[..m * w].chunks_exact(w) {
+                    for (p, v) in pooled.iter_mut().zip(row) {
+                        *p = p.max(*v);
+                    }
                 }
             }
             for row in x.chunks_exact(NODE_FEATURES) {

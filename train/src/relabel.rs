@@ -15,8 +15,7 @@ use crate::dagger::{Coach, Relabelled};
 use nalgebra::Isometry3;
 use packwright_interface::record::{self, MotionLog};
 use packwright_kinematics::{Arm, Joints};
-use packwright_motion::execute::{REACHED, REACHED_VIA, policy_steps};
-use packwright_motion::expert::{Suction, schedule};
+use packwright_motion::execute::{policy_steps, tolerance};
 use packwright_nets::features::ActionExample;
 use rayon::prelude::*;
 
@@ -57,20 +56,13 @@ impl<'a> ExpertCoach<'a> {
         let motions = logs
             .iter()
             .flat_map(|r| r.log.subgoals.iter().map(move |s| (r, s)))
-            .map(|(r, s)| {
-                // The suction switches at the pick's contact and the
-                // release: those are reached within 2 mm.
-                let switch = schedule(s.stage)
-                    .get(usize::from(s.index))
-                    .is_some_and(|&k| k != Suction::Keep);
-                Motion {
-                    start: s.start,
-                    goal: s.goal,
-                    target: s.target,
-                    tolerance: if switch { REACHED } else { REACHED_VIA },
-                    base: Isometry3::translation(r.base[0], r.base[1], r.base[2]),
-                    suction: r.suction,
-                }
+            .map(|(r, s)| Motion {
+                start: s.start,
+                goal: s.goal,
+                target: s.target,
+                tolerance: tolerance(s.stage, usize::from(s.index)),
+                base: Isometry3::translation(r.base[0], r.base[1], r.base[2]),
+                suction: r.suction,
             })
             .collect();
         ExpertCoach { arm, motions }

@@ -15,7 +15,7 @@ use super::station::{
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
 use crate::expert::{SubGoal, Suction, schedule};
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Vector3};
 use packwright_interface::outcome::{
     Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, Violation,
 };
@@ -27,19 +27,43 @@ use std::time::Instant;
 /// Via points of the vertical retreat from a release, when the straight
 /// joint motion up would touch the box.
 const RETREAT_VIAS: usize = 5;
-/// Most dynamics-policy steps per sub-goal.
-pub const MAX_POLICY_STEPS: usize = 40;
+/// Most dynamics-policy steps per sub-goal: a 180-degree swing takes 36
+/// full steps, and near 180 degrees, where both ways round are as short,
+/// the policy takes a few steps to commit to one.
+pub const MAX_POLICY_STEPS: usize = 60;
 /// A sub-goal where the suction switches (the cup on a product's top
-/// face, a release in a slot) is reached when the cup tip is this close (m).
+/// face, a release in a slot), or the one just before it (the hover, above
+/// the slot), is reached when the cup tip is this close (m): the motion
+/// between them is then the straight descent the expert showed.
 pub const REACHED: f64 = 0.002;
-/// A via point (hover, lift, approach, above the slot) is reached when the
-/// cup tip is this close (m).
+/// Any other via point (the lift, the approach) is reached when the cup tip
+/// is this close (m).
 pub const REACHED_VIA: f64 = 0.01;
 
+/// How close the cup tip must come to sub-goal `index` (from 0) of `stage`:
+/// [`REACHED`] where the suction switches and just before, else
+/// [`REACHED_VIA`]. The learned loop and DAgger's coach both use it.
+pub fn tolerance(stage: Stage, index: usize) -> f64 {
+    let switches = |k: usize| schedule(stage).get(k).is_some_and(|&s| s != Suction::Keep);
+    if switches(index) || switches(index + 1) {
+        REACHED
+    } else {
+        REACHED_VIA
+    }
+}
+
 /// `q` moved by `step` (base, shoulder, elbow), the wrist turned so that the
-/// cup keeps pointing down with the same yaw (UR-type wrists); `None` when
-/// that does not hold for this arm or leaves the joint limits.
-pub fn cup_down(arm: &Arm, base: &Isometry3<f64>, q: &Joints, step: [f64; 3]) -> Option<Joints> {
+/// cup keeps pointing down with the same yaw (UR-type wrists); why not when
+/// that does not hold for this arm or leaves the joint limits. The base and
+/// wrist 3 turn freely here (`q` and `q` ± 2π are the same pose): whoever
+/// moves the arm along the steps brings them into the limits
+/// ([`Arm::into_limits`]).
+pub fn cup_down(
+    arm: &Arm,
+    base: &Isometry3<f64>,
+    q: &Joints,
+    step: [f64; 3],
+) -> Result<Joints, Shortfall> {
     let mut next = *q;
     next[0] += step[0];
     next[1] += step[1];
@@ -48,8 +72,19 @@ pub fn cup_down(arm: &Arm, base: &Isometry3<f64>, q: &Joints, step: [f64; 3]) ->
     next[5] += step[0];
     let before = arm.flange_pose(base, q).rotation;
     let after = arm.flange_pose(base, &next).rotation;
-    let kept = before.angle_to(&after) < 1e-6;
-    (kept && arm.within_limits(&next)).then_some(next)
+    if before.angle_to(&after) >= 1e-6 {
+        return Err(Shortfall::Limits {
+            joint: None,
+            value: f64::NAN,
+        });
+    }
+    match (1..5).find(|&j| !arm.limits[j].contains(next[j])) {
+        Some(j) => Err(Shortfall::Limits {
+            joint: Some(j),
+            value: next[j],
+        }),
+        None => Ok(next),
+    }
 }
 
 /// The dynamics policy's steps from `start` towards the cup-tip position
@@ -84,7 +119,7 @@ pub fn policy_steps(
             });
         }
         let step = record::clip(action(&q, delta).map(f64::from));
-        q = cup_down(arm, base, &q, step).ok_or(Shortfall::Limits)?;
+        q = cup_down(arm, base, &q, step)?;
         steps.push(q);
     }
 }
@@ -106,6 +141,13 @@ impl From<Failure> for Halt {
 enum Stopped {
     Violation(Violation),
     Failed(Failure),
+}
+
+/// A stage's three sub-goals as proposed, and where the cup tip stopped
+/// at each.
+struct Reached {
+    goals: [[f64; 3]; 3],
+    tips: [[f64; 3]; 3],
 }
 
 /// One stage's inputs.
@@ -162,15 +204,31 @@ impl<W: World> Learned<'_, W> {
                 action
             },
         )?;
-        let Some(&q) = steps.last() else {
+        let Some(last) = steps.last() else {
             return Ok(Vec::new());
         };
-        checked_samples(s.arm, &s.checker, start, &[q], load)
-            .or_else(|_| checked_samples(s.arm, &s.checker, start, &steps, load))
-            .map_err(|e| match e {
-                Unchecked::Collides(hit) => Shortfall::Collides { hit },
-                Unchecked::Smoothing(_) => Shortfall::Limits,
-            })
+        // The base and wrist 3 may have turned past their limits: the same
+        // pose a whole turn back, which the straight motion reaches the
+        // other way round.
+        let end = s.arm.into_limits(last, &start).ok_or_else(|| {
+            let joint = (0..last.len()).find(|&j| !s.arm.limits[j].contains(last[j]));
+            Shortfall::Limits {
+                joint,
+                value: joint.map_or(f64::NAN, |j| last[j]),
+            }
+        })?;
+        let why = |e| match e {
+            Unchecked::Collides(hit) => Shortfall::Collides { hit },
+            Unchecked::Smoothing(reason) => Shortfall::Smoothing { reason },
+        };
+        match checked_samples(s.arm, &s.checker, start, &[end], load) {
+            Ok(samples) => Ok(samples),
+            // Through every step instead, when they stay within the limits.
+            Err(straight) if steps.iter().all(|q| s.arm.within_limits(q)) => {
+                checked_samples(s.arm, &s.checker, start, &steps, load).map_err(|_| why(straight))
+            }
+            Err(straight) => Err(why(straight)),
+        }
     }
 
     /// The rest of a stage's sub-goal `k` (from 0) by RRT-Connect.
@@ -184,14 +242,22 @@ impl<W: World> Learned<'_, W> {
     ) -> Result<Vec<Joints>, Failure> {
         let s = &self.station;
         let target = s.solve(&goal, k + 1, &start, 0.0, load, ceiling)?;
-        let path = s.connect(Connect::Rrt { seed: self.seed }, k + 1, start, target, load)?;
-        s.checked(k + 1, start, path.get(1..).unwrap_or(&[]), load)
+        s.route_any(
+            Connect::Rrt { seed: self.seed },
+            k + 1,
+            start,
+            target,
+            0.0,
+            load,
+        )
+        .map(|(_, samples)| samples)
     }
 
     /// One stage with learned sub-goals and motions: the sub-goals used.
-    fn stage(&mut self, plan: &StagePlan) -> Result<[[f64; 3]; 3], Failure> {
+    fn stage(&mut self, plan: &StagePlan) -> Result<Reached, Failure> {
         let mut fallen = false;
         let mut goals = [[0.0; 3]; 3];
+        let mut tips = [[0.0; 3]; 3];
         let base = f32s(self.station.task.cell.base);
         for (k, switch) in schedule(plan.stage).into_iter().enumerate() {
             let start = self.station.world.observe().joints;
@@ -227,11 +293,7 @@ impl<W: World> Learned<'_, W> {
                 goal[2]
             };
             let rolled = (!fallen).then(|| {
-                let tolerance = if switch == Suction::Keep {
-                    REACHED_VIA
-                } else {
-                    REACHED
-                };
+                let tolerance = tolerance(plan.stage, k);
                 let mut first_action_us = None;
                 // The first attempt's shortfall is the one reported.
                 let mut rolled =
@@ -277,8 +339,9 @@ impl<W: World> Learned<'_, W> {
             self.station.timing.subgoal_us.push(elapsed * 1e6);
             self.station.clock.planning_s += elapsed;
             self.station.send(&samples, switch)?;
+            tips[k] = self.station.tip(&self.station.world.observe().joints);
         }
-        Ok(goals)
+        Ok(Reached { goals, tips })
     }
 
     /// Backs off straight up to the height of `above` (the learned "above
@@ -381,7 +444,7 @@ impl<W: World> Learned<'_, W> {
         let obs = self.station.world.observe();
         self.station.sync_products(&obs);
         let (centre, _) = obs.find(name).ok_or(Failure::Disappeared)?;
-        self.stage(&StagePlan {
+        let picked = self.stage(&StagePlan {
             stage: Stage::Picking,
             product: name,
             feature: centre,
@@ -407,21 +470,36 @@ impl<W: World> Learned<'_, W> {
                 expected: s + 1,
             }));
         }
-        let held = Held {
-            name: name.to_owned(),
-            size: spec.size,
-            in_flange: Isometry3::translation(0.0, 0.0, cell.suction + spec.size[2] / 2.0),
-        };
+        // The cup met the top face where the learned sub-goal put it, a
+        // few millimetres from the product's centre (sensed before the
+        // pick): the product hangs that far off the cup. The checker
+        // carries it there, and the cup aims that much beside the slot so
+        // that the product lands centred. The cup keeps its yaw while it
+        // carries, so the offset stays the same in the world.
+        let contact = picked.tips[1];
+        let grip = [centre[0] - contact[0], centre[1] - contact[1]];
+        let flange = self
+            .station
+            .arm
+            .flange_pose(&self.station.base, &obs.joints)
+            .rotation;
+        let held = Held::under_cup(
+            name,
+            spec.size,
+            cell.suction,
+            flange.inverse() * Vector3::new(grip[0], grip[1], 0.0),
+        );
         self.station.sync_products(&obs);
-        let goals = self.stage(&StagePlan {
+        let rim = task.slot_rim(s);
+        let placed = self.stage(&StagePlan {
             stage: Stage::Placing,
             product: name,
-            feature: task.slot_rim(s),
+            feature: [rim[0] - grip[0], rim[1] - grip[1], rim[2]],
             height: spec.size[2],
             contact: None,
             load: Load::holding(&held),
         })?;
-        self.retreat(goals[1], name)?;
+        self.retreat(placed.goals[1], name)?;
         Ok(())
     }
 }

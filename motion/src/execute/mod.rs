@@ -25,7 +25,7 @@ mod reasoner;
 mod scripted;
 mod station;
 
-pub use learned::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps};
+pub use learned::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps, tolerance};
 pub use reasoner::{demonstrated_decisions, expected_next, graph, reasoner_trial};
 pub use station::{HOME_HEIGHT, Load, Unchecked, checked_samples, home, reach};
 

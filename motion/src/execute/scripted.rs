@@ -7,7 +7,7 @@
 use super::station::{Connect, Load, SUCCESS_RADIUS, Station, distance, judge};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction};
-use nalgebra::Isometry3;
+use nalgebra::Vector3;
 use packwright_interface::outcome::{Failure, Outcome, PlannerKind, Report, Stage};
 use packwright_interface::record::{self, ActionSample, MotionLog, SubGoalSample};
 use packwright_interface::{OrderTask, World};
@@ -29,19 +29,28 @@ struct Scripted<'a, W: World> {
     log: Option<&'a mut MotionLog>,
 }
 
-/// One stage's joint paths, each with the suction switch at its end.
-type Plan = Vec<(Vec<Joints>, Suction)>;
+/// One sub-goal of a stage, solved before the arm moves.
+struct Planned {
+    goal: SubGoal,
+    /// The joints, nearest the previous sub-goal's.
+    joints: Joints,
+    /// How high a release may be raised.
+    ceiling: f64,
+    /// Microseconds its inverse kinematics took.
+    solve_us: f64,
+}
 
 impl<W: World> Scripted<'_, W> {
-    /// Plans the joint paths from `from` to each sub-goal (a release the
-    /// wrist cannot reach is raised up to the previous sub-goal's height).
+    /// Solves every sub-goal of a stage before the arm moves (a release the
+    /// wrist cannot reach is raised up to the previous sub-goal's height):
+    /// an unreachable sub-goal stops the stage before it starts.
     fn plan_stage(
         &mut self,
         from: Joints,
         goals: &[SubGoal],
         yaw: f64,
         load: Load,
-    ) -> Result<Plan, Failure> {
+    ) -> Result<Vec<Planned>, Failure> {
         let started = Instant::now();
         let mut out = Vec::new();
         let mut current = from;
@@ -50,20 +59,14 @@ impl<W: World> Scripted<'_, W> {
             let ceiling = goals
                 .get(k.wrapping_sub(1))
                 .map_or(g.tip[2], |prev| prev.tip[2]);
-            let target = self.station.solve(g, k + 1, &current, yaw, load, ceiling)?;
-            let how = match self.connect {
-                Connect::Rrt { seed } => Connect::Rrt {
-                    seed: seed.wrapping_add(k as u64),
-                },
-                straight => straight,
-            };
-            let path = self.station.connect(how, k + 1, current, target, load)?;
-            out.push((path, g.suction));
-            current = target;
-            self.station
-                .timing
-                .subgoal_us
-                .push(subgoal_started.elapsed().as_secs_f64() * 1e6);
+            let joints = self.station.solve(g, k + 1, &current, yaw, load, ceiling)?;
+            out.push(Planned {
+                goal: *g,
+                joints,
+                ceiling,
+                solve_us: subgoal_started.elapsed().as_secs_f64() * 1e6,
+            });
+            current = joints;
         }
         self.station.clock.planning_s += started.elapsed().as_secs_f64();
         Ok(out)
@@ -109,25 +112,46 @@ impl<W: World> Scripted<'_, W> {
         }
     }
 
-    /// Smooths, checks and sends one stage's motions; switches the suction.
+    /// Joins, smooths, checks and sends one stage's motions (from where the
+    /// arm is, to each planned sub-goal, or to another solution of it when
+    /// the planned one cannot be joined; the sub-goals after such a change
+    /// are solved again from it); switches the suction.
     fn run_stage(
         &mut self,
-        plan: Plan,
+        plan: Vec<Planned>,
+        yaw: f64,
         load: Load,
         info: Option<StageInfo>,
     ) -> Result<(), Failure> {
-        for (k, (path, suction)) in plan.into_iter().enumerate() {
+        let mut replanned = false;
+        for (k, planned) in plan.into_iter().enumerate() {
             let start = self.station.world.observe().joints;
             let started = Instant::now();
-            let samples = self
-                .station
-                .checked(k + 1, start, path.get(1..).unwrap_or(&[]), load);
-            self.station.clock.planning_s += started.elapsed().as_secs_f64();
-            let samples = samples?;
-            if let (Some(info), Some(goal)) = (info, path.last()) {
-                self.record(info, k, &start, goal, &samples);
+            let how = match self.connect {
+                Connect::Rrt { seed } => Connect::Rrt {
+                    seed: seed.wrapping_add(k as u64),
+                },
+                straight => straight,
+            };
+            let routed = if replanned {
+                self.station
+                    .solve(&planned.goal, k + 1, &start, yaw, load, planned.ceiling)
+            } else {
+                Ok(planned.joints)
             }
-            self.station.send(&samples, suction)?;
+            .and_then(|target| self.station.route_any(how, k + 1, start, target, yaw, load));
+            let elapsed = started.elapsed().as_secs_f64();
+            self.station.clock.planning_s += elapsed;
+            self.station
+                .timing
+                .subgoal_us
+                .push(planned.solve_us + elapsed * 1e6);
+            let (goal, samples) = routed?;
+            replanned |= goal != planned.joints;
+            if let Some(info) = info {
+                self.record(info, k, &start, &goal, &samples);
+            }
+            self.station.send(&samples, planned.goal.suction)?;
         }
         Ok(())
     }
@@ -151,14 +175,10 @@ impl<W: World> Scripted<'_, W> {
             label: 0,
             height: h,
         };
-        self.run_stage(plan, free, Some(pick))?;
+        self.run_stage(plan, yaw, free, Some(pick))?;
 
         let obs = self.station.world.observe();
-        let held = Held {
-            name: name.to_owned(),
-            size: spec.size,
-            in_flange: Isometry3::translation(0.0, 0.0, cell.suction + h / 2.0),
-        };
+        let held = Held::under_cup(name, spec.size, cell.suction, Vector3::zeros());
         let slot = cell.slots[s].position;
         let placing = expert::placing(
             picking[2].tip,
@@ -177,7 +197,7 @@ impl<W: World> Scripted<'_, W> {
             label: s as u32 + 1,
             height: h,
         };
-        self.run_stage(plan, carrying, Some(place))?;
+        self.run_stage(plan, 0.0, carrying, Some(place))?;
 
         // Back up from the released product.
         let obs = self.station.world.observe();
@@ -186,7 +206,7 @@ impl<W: World> Scripted<'_, W> {
             suction: Suction::Keep,
         }];
         let plan = self.plan_stage(obs.joints, &up, 0.0, free)?;
-        self.run_stage(plan, free, None)
+        self.run_stage(plan, 0.0, free, None)
     }
 }
 

@@ -172,17 +172,17 @@ impl<'a, W: World> Station<'a, W> {
             })
     }
 
-    /// The joint path from `from` to `to` (both included) for sub-goal `k`.
+    /// The checked commands from `from` to `to` for sub-goal `k`.
     ///
-    /// Both ways first try the straight joint-space motion and, when it
-    /// collides, a swing: the base turned alone with the arm's shape kept
-    /// (the wrist keeping the cup's yaw), then the rest of the motion, or
-    /// the rest first and the swing last. On a front-to-back swing the
-    /// straight line folds the wrist into the forearm half-way, where the
-    /// arm held in shape sweeps clear. The expert then gives up (its
-    /// straight motion's collision is reported when it is checked);
-    /// RRT-Connect searches.
-    pub fn connect(
+    /// Both ways first try the straight joint-space motion and, when its
+    /// commands collide, a swing: the base turned alone with the arm's
+    /// shape kept (the wrist keeping the cup's yaw), then the rest of the
+    /// motion, or the rest first and the swing last. On a front-to-back
+    /// swing the straight line folds the wrist into the forearm half-way,
+    /// where the arm held in shape sweeps clear. The expert then gives up
+    /// with the straight motion's collision; RRT-Connect searches. Every
+    /// candidate is checked once, as the commands that will be sent.
+    pub fn route(
         &self,
         how: Connect,
         k: usize,
@@ -190,14 +190,11 @@ impl<'a, W: World> Station<'a, W> {
         to: Joints,
         load: Load,
     ) -> Result<Vec<Joints>, Failure> {
-        let free = |a: &Joints, b: &Joints| {
-            self.checker
-                .check_motion(a, b, load.held, load.ignore)
-                .is_none()
+        let straight = match self.checked(k, from, &[to], load) {
+            Ok(samples) => return Ok(samples),
+            Err(why @ Failure::WouldCollide { .. }) => why,
+            Err(other) => return Err(other),
         };
-        if free(&from, &to) {
-            return Ok(vec![from, to]);
-        }
         let turn = to[0] - from[0];
         let mut swing_first = from;
         swing_first[0] = to[0];
@@ -206,12 +203,14 @@ impl<'a, W: World> Station<'a, W> {
         swing_last[0] = from[0];
         swing_last[5] -= turn;
         for via in [swing_first, swing_last] {
-            if self.arm.within_limits(&via) && free(&from, &via) && free(&via, &to) {
-                return Ok(vec![from, via, to]);
+            if self.arm.within_limits(&via)
+                && let Ok(samples) = self.checked(k, from, &[via, to], load)
+            {
+                return Ok(samples);
             }
         }
         match how {
-            Connect::Straight => Ok(vec![from, to]),
+            Connect::Straight => Err(straight),
             Connect::Rrt { seed } => {
                 let query = Query {
                     checker: &self.checker,
@@ -223,9 +222,48 @@ impl<'a, W: World> Station<'a, W> {
                     seed,
                     ..RrtConfig::default()
                 };
-                rrt::plan(&query, from, to, &config).ok_or(Failure::NoPath { subgoal: k })
+                let path =
+                    rrt::search(&query, from, to, &config).ok_or(Failure::NoPath { subgoal: k })?;
+                self.checked(k, from, path.get(1..).unwrap_or(&[]), load)
             }
         }
+    }
+
+    /// [`Station::route`] to `target`, else to another free
+    /// inverse-kinematics solution of the same cup pose (nearest `from`
+    /// first, joined straight or by a swing): the nearest solution can have
+    /// another wrist or shoulder shape, whose motion folds the arm into
+    /// itself where one a little further away sweeps clear. The joints
+    /// reached and the commands, or the first failure.
+    pub fn route_any(
+        &self,
+        how: Connect,
+        k: usize,
+        from: Joints,
+        target: Joints,
+        yaw: f64,
+        load: Load,
+    ) -> Result<(Joints, Vec<Joints>), Failure> {
+        let first = match self.route(how, k, from, target, load) {
+            Ok(samples) => return Ok((target, samples)),
+            Err(why @ (Failure::WouldCollide { .. } | Failure::NoPath { .. })) => why,
+            Err(other) => return Err(other),
+        };
+        let tip = self
+            .arm
+            .tool_tip(&self.base, &target, self.task.cell.suction);
+        solutions(&self.checker, tip, yaw, &from)
+            .into_iter()
+            .filter(|q| {
+                joint_distance(q, &target) > 1e-12
+                    && self.checker.check(q, load.held, load.ignore).is_none()
+            })
+            .find_map(|q| {
+                self.route(Connect::Straight, k, from, q, load)
+                    .ok()
+                    .map(|samples| (q, samples))
+            })
+            .ok_or(first)
     }
 
     /// The checked commands from `start` through `waypoints` towards
@@ -415,6 +453,15 @@ pub fn reach(
     near: &Joints,
     load: Load,
 ) -> Option<Joints> {
+    solutions(checker, tip, yaw, near)
+        .into_iter()
+        .find(|q| checker.check(q, load.held, load.ignore).is_none())
+}
+
+/// Every inverse-kinematics solution for the cup tip at `tip` pointing
+/// down with `yaw`, nearest `near` first, not yet checked for collisions
+/// (callers check lazily: the nearest free one is usually the first).
+fn solutions(checker: &Checker, tip: Point3<f64>, yaw: f64, near: &Joints) -> Vec<Joints> {
     let (arm, base) = (checker.arm(), checker.base());
     let flange = tool_down_pose(tip, yaw, checker.suction());
     let mut candidates: Vec<Joints> = if arm.ur.is_some() {
@@ -427,8 +474,6 @@ pub fn reach(
     };
     candidates.sort_by(|a, b| joint_distance(a, near).total_cmp(&joint_distance(b, near)));
     candidates
-        .into_iter()
-        .find(|q| checker.check(q, load.held, load.ignore).is_none())
 }
 
 /// The start pose: the cup [`HOME_HEIGHT`] over the middle of the pending
