@@ -4,7 +4,7 @@
 //! `cargo bench --bench compile`
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use packwright_compiler::{MemoryLoader, compile};
+use packwright_compiler::{Anywhere, MemoryLoader, compile};
 use std::hint::black_box;
 use std::path::PathBuf;
 
@@ -61,7 +61,8 @@ scenarios suite for stock5 {
 fn bench(c: &mut Criterion) {
     let loader = MemoryLoader::new().with("large.pack", large_file());
     let roots = [PathBuf::from("large.pack")];
-    let (compiled, artifacts) = compile(&loader, &roots).expect("the generated file compiles");
+    let (compiled, artifacts) =
+        compile(&loader, &roots, &Anywhere).expect("the generated file compiles");
     assert_eq!(compiled.expanded.demonstrations.len(), 5_000);
     assert_eq!(compiled.expanded.suites[0].cases.len(), 10_000);
     let bytes: usize = artifacts.iter().map(|a| a.bytes.len()).sum();
@@ -74,7 +75,7 @@ fn bench(c: &mut Criterion) {
     group.sample_size(10);
     group.bench_function("5k demos + 10k scenarios", |b| {
         b.iter(|| {
-            compile(&loader, black_box(&roots))
+            compile(&loader, black_box(&roots), &Anywhere)
                 .map(|(_, a)| a.len())
                 .unwrap_or(0)
         })

@@ -9,6 +9,7 @@ mod common;
 use common::{packwright, scratch};
 use packwright_compiler::{Compiled, MemoryLoader, check};
 use packwright_pipeline::generate::{Generated, Side, SuiteKind, family_cell, suite_name};
+use packwright_pipeline::reach::RobotWorkspace;
 use std::collections::BTreeSet;
 use std::fs;
 use std::path::PathBuf;
@@ -18,7 +19,11 @@ const SEEDS: std::ops::Range<u64> = 0..40;
 
 fn compile(g: &Generated) -> Compiled {
     let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
-    match check(&loader, &[PathBuf::from(g.file_name())]) {
+    match check(
+        &loader,
+        &[PathBuf::from(g.file_name())],
+        &RobotWorkspace::new(),
+    ) {
         Ok(c) => c,
         Err(failed) => panic!(
             "seed {}: {} diagnostics\n{}\n{}",

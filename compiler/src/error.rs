@@ -3,6 +3,7 @@
 //! its fix (`help`). Rendering lives in `diagnostic`.
 
 use crate::source::Loc;
+use crate::workspace::{Pose, Task};
 use packwright_grammar::SyntaxError;
 use std::path::PathBuf;
 use thiserror::Error;
@@ -113,6 +114,15 @@ pub enum Error {
         min: f64,
         max: f64,
     },
+    #[error("the robot cannot reach {pose} {task}")]
+    Unreachable {
+        at: Loc,
+        /// What the robot was doing.
+        task: Task,
+        pose: Pose,
+        /// Where the tool tip would be (world frame, m).
+        tip: [f64; 3],
+    },
     #[error(
         "product `{product}` does not fit in slot `{slot}`: it sticks out of box `{box_name}` by {by_mm:.0} mm"
     )]
@@ -217,6 +227,7 @@ impl Error {
             Error::OutsidePending { .. } => "E034",
             Error::ProductsOverlap { .. } => "E035",
             Error::OutOfReach { .. } => "E036",
+            Error::Unreachable { .. } => "E039",
             Error::DoesNotFit { .. } => "E037",
             Error::PlacedOverlap { .. } => "E038",
             Error::ChooseTooMany { .. } => "E040",
@@ -255,6 +266,7 @@ impl Error {
             | Error::OutsidePending { at, .. }
             | Error::ProductsOverlap { at, .. }
             | Error::OutOfReach { at, .. }
+            | Error::Unreachable { at, .. }
             | Error::DoesNotFit { at, .. }
             | Error::PlacedOverlap { at, .. }
             | Error::ChooseTooMany { at, .. }
@@ -297,6 +309,10 @@ impl Error {
                 "too close to the base".into()
             }
             Error::OutOfReach { .. } => "too far from the base".into(),
+            Error::Unreachable { tip, .. } => format!(
+                "the tool tip would be at ({:.3}, {:.3}, {:.3})",
+                tip[0], tip[1], tip[2]
+            ),
             Error::DoesNotFit { .. } => "does not fit".into(),
             Error::PlacedOverlap { .. } => "these products would collide in the box".into(),
             Error::ChooseTooMany { .. } => "too many".into(),
@@ -357,6 +373,10 @@ impl Error {
             Error::OutsidePending { .. } => "move the product so that its whole footprint is inside the `pending` area, or enlarge the area".into(),
             Error::ProductsOverlap { .. } => "move one of them; footprints (centre ± half the width and depth) must not overlap".into(),
             Error::OutOfReach { min, max, .. } => format!("the UR10 reaches between {min:.2} m and {max:.2} m from its base axis; move it or the `base`"),
+            Error::Unreachable { pose: Pose::Start, .. } => "the arm starts with its cup 0.35 m over the middle of the `pending` area: bring the area nearer the robot's base (or the `base` nearer the area)".into(),
+            Error::Unreachable { pose, .. } if pose.is_picking() => "move the product nearer the robot's base (or the `base` nearer the products), or lower the cell's `lift`; the cup (`suction`) reaches down from the wrist, so a shorter cup reaches further".into(),
+            Error::Unreachable { pose: Pose::Approach, .. } => "the robot carries the product round its base axis, at the lift's height or clear of the box's rim if that is higher, half-way between the product and the slot: bring the product and the slot nearer each other, lower the cell's `lift`, or use a lower box".into(),
+            Error::Unreachable { .. } => "move the slot (or its box) nearer the robot's base, or use a lower box: the product is held above the rim before it goes down".into(),
             Error::DoesNotFit { .. } => "move the slot further from the box wall, use a larger box, or put a smaller product there".into(),
             Error::PlacedOverlap { .. } => "move the slots further apart".into(),
             Error::ChooseTooMany { .. } => "lower N, or list more products and slots".into(),

@@ -3,7 +3,9 @@
 //! as bytes; the caller does the IO.
 //!
 //! Phases: [`load`] (read + parse, following `use`) -> [`resolve`] (names,
-//! statements) -> [`validate`] (geometry) -> [`expand`] (generators) ->
+//! statements) -> [`validate`] (geometry) -> [`workspace`] (every pose the
+//! robot needs, asked of a [`Workspace`] the caller gives: the compiler
+//! knows no kinematics) -> [`expand`] (generators) ->
 //! [`dataset`] (graph samples) -> [`emit`] (artifact bytes). Each phase
 //! reports every error it finds; a phase runs only if those before it were
 //! clean, so that one mistake is not reported again as its consequences.
@@ -19,10 +21,12 @@ pub mod model;
 pub mod resolve;
 pub mod source;
 pub mod validate;
+pub mod workspace;
 
 pub use emit::Artifact;
 pub use error::Error;
 pub use source::{FileId, Loader, Loc, MemoryLoader, SourceMap};
+pub use workspace::{Anywhere, Workspace};
 
 use std::path::PathBuf;
 
@@ -63,14 +67,23 @@ fn fail(sources: SourceMap, mut errors: Vec<Error>) -> Failed {
     Failed { sources, errors }
 }
 
-/// Checks the files and everything they use, and expands their generators.
-pub fn check(loader: &dyn Loader, roots: &[PathBuf]) -> Result<Compiled, Failed> {
+/// Checks the files and everything they use (the robot's reach through
+/// `workspace`; [`Anywhere`] skips it), and expands their generators.
+pub fn check(
+    loader: &dyn Loader,
+    roots: &[PathBuf],
+    workspace: &dyn Workspace,
+) -> Result<Compiled, Failed> {
     let loaded = load::load(loader, roots);
     if !loaded.errors.is_empty() {
         return Err(fail(loaded.sources, loaded.errors));
     }
     let (model, mut errors) = resolve::resolve(loader, &loaded.sources, &loaded.files);
     errors.extend(validate::validate(&model));
+    if !errors.is_empty() {
+        return Err(fail(loaded.sources, errors));
+    }
+    let errors = workspace::check(&model, workspace);
     if !errors.is_empty() {
         return Err(fail(loaded.sources, errors));
     }
@@ -91,8 +104,9 @@ pub fn check(loader: &dyn Loader, roots: &[PathBuf]) -> Result<Compiled, Failed>
 pub fn compile(
     loader: &dyn Loader,
     roots: &[PathBuf],
+    workspace: &dyn Workspace,
 ) -> Result<(Compiled, Vec<Artifact>), Failed> {
-    let compiled = check(loader, roots)?;
+    let compiled = check(loader, roots, workspace)?;
     match emit::emit(
         &compiled.sources,
         &compiled.model,

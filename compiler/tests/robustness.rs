@@ -1,7 +1,7 @@
 //! The compiler never panics, whatever it is given: arbitrary text and
 //! mutations of valid files end in diagnostics or a clean compilation.
 
-use packwright_compiler::{MemoryLoader, check, compile};
+use packwright_compiler::{Anywhere, MemoryLoader, check, compile};
 use proptest::prelude::*;
 use std::path::PathBuf;
 
@@ -16,7 +16,7 @@ fn run(main: &str) {
         .with("cells/line2.pack", LINE2)
         .with("cells/twin_row.pack", TWIN);
     let roots = [PathBuf::from("t/main.pack")];
-    match compile(&loader, &roots) {
+    match compile(&loader, &roots, &Anywhere) {
         Ok(_) => {}
         Err(f) => {
             assert!(!f.errors.is_empty());
@@ -107,7 +107,7 @@ fn the_unmutated_bases_compile() {
         .with("t/main.pack", SUITE)
         .with("cells/line2.pack", LINE2)
         .with("cells/twin_row.pack", TWIN);
-    if let Err(f) = check(&loader, &[PathBuf::from("t/main.pack")]) {
+    if let Err(f) = check(&loader, &[PathBuf::from("t/main.pack")], &Anywhere) {
         panic!("{}", f.render());
     }
 }

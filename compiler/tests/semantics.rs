@@ -1,6 +1,6 @@
 //! The compiler's documented semantics, on in-memory files.
 
-use packwright_compiler::{Compiled, Error, MemoryLoader, check};
+use packwright_compiler::{Anywhere, Compiled, Error, MemoryLoader, check};
 use std::path::PathBuf;
 
 const CELL: &str = "
@@ -32,7 +32,7 @@ inventory stock5 for bench {
 
 fn compile(extra: &str) -> Result<Compiled, Vec<Error>> {
     let loader = MemoryLoader::new().with("main.pack", format!("{CELL}\n{extra}"));
-    check(&loader, &[PathBuf::from("main.pack")]).map_err(|f| f.errors)
+    check(&loader, &[PathBuf::from("main.pack")], &Anywhere).map_err(|f| f.errors)
 }
 
 fn ok(extra: &str) -> Compiled {
@@ -285,6 +285,7 @@ fn a_use_is_relative_to_the_using_file_and_loaded_once() {
             PathBuf::from("orders/a.pack"),
             PathBuf::from("orders/b.pack"),
         ],
+        &Anywhere,
     )
     .expect("compiles");
     assert_eq!(c.sources.files().count(), 3);

@@ -205,25 +205,29 @@ impl Checker {
         out
     }
 
-    /// The first collision of the arm (and `held`) at joints `q`, ignoring
-    /// the product named `ignore` (the one being picked).
+    /// The first collision of the arm (and `held`) at joints `q`. The
+    /// product named `ignore` (the one being picked, or just released) is
+    /// ignored by the cup alone, which touches its top face: a link that
+    /// reaches it still collides.
     pub fn check(&self, q: &Joints, held: Option<&Held>, ignore: Option<&str>) -> Option<Hit> {
         if q.iter().any(|v| !v.is_finite()) {
             return Some(Hit::InvalidJoints);
         }
         let poses = self.part_poses(q);
-        let skipped = |o: &&Obstacle| match &o.body {
-            Body::Product(n) => Some(n.as_str()) == ignore || held.is_some_and(|h| &h.name == n),
+        let skipped = |o: &Obstacle, by_cup: bool| match &o.body {
+            Body::Product(n) => {
+                (by_cup && Some(n.as_str()) == ignore) || held.is_some_and(|h| &h.name == n)
+            }
             _ => false,
         };
-        let obstacles = || {
+        let obstacles = move |by_cup: bool| {
             self.statics
                 .iter()
-                .chain(self.products.iter().filter(move |o| !skipped(o)))
+                .chain(self.products.iter().filter(move |o| !skipped(o, by_cup)))
         };
         for (part, p) in self.parts.iter().zip(&poses) {
             let aabb = part.shape.compute_aabb(p);
-            for o in obstacles() {
+            for o in obstacles(part.part == CUP) {
                 if o.is_table && part.part <= 1 {
                     continue;
                 }
@@ -252,7 +256,7 @@ impl Checker {
             )));
             let aabb = cuboid.compute_aabb(&hp);
             let name = Body::Held(h.name.clone());
-            for o in obstacles() {
+            for o in obstacles(true) {
                 if aabb.intersects(&o.aabb) && intersects(&hp, &cuboid, &o.pose, &o.shape) {
                     return Some(Hit::Bodies {
                         a: name,

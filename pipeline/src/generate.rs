@@ -886,7 +886,11 @@ mod tests {
             assert_eq!(g, family_cell(seed));
             assert_eq!(packwright_grammar::format(&g.text).unwrap(), g.text);
             let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
-            let compiled = match check(&loader, &[PathBuf::from(g.file_name())]) {
+            let compiled = match check(
+                &loader,
+                &[PathBuf::from(g.file_name())],
+                &crate::reach::RobotWorkspace::new(),
+            ) {
                 Ok(c) => c,
                 Err(failed) => panic!("seed {seed}:\n{}\n{}", failed.render(), g.text),
             };

@@ -12,6 +12,7 @@ pub mod evaluate;
 pub mod generate;
 pub mod models;
 pub mod motion_file;
+pub mod reach;
 pub mod replay;
 pub mod stats;
 pub mod teach;

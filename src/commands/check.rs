@@ -4,9 +4,10 @@ use super::{report_failure, summary_line};
 use crate::Exit;
 use crate::cli::CheckArgs;
 use crate::fsio::FsLoader;
+use packwright_pipeline::reach::RobotWorkspace;
 
 pub fn run(args: &CheckArgs) -> anyhow::Result<Exit> {
-    match packwright_compiler::check(&FsLoader, &args.files) {
+    match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new()) {
         Ok(compiled) => {
             if args.json {
                 outln!(

@@ -4,12 +4,14 @@ use super::{report_failure, summary_line};
 use crate::Exit;
 use crate::cli::CompileArgs;
 use crate::fsio::{FsLoader, write_dir_atomically};
+use packwright_pipeline::reach::RobotWorkspace;
 
 pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
-    let (compiled, artifacts) = match packwright_compiler::compile(&FsLoader, &args.files) {
-        Ok(ok) => ok,
-        Err(failed) => return Ok(report_failure(&failed, args.json)),
-    };
+    let (compiled, artifacts) =
+        match packwright_compiler::compile(&FsLoader, &args.files, &RobotWorkspace::new()) {
+            Ok(ok) => ok,
+            Err(failed) => return Ok(report_failure(&failed, args.json)),
+        };
     write_dir_atomically(&args.output, &artifacts, "manifest.json")?;
     if args.json {
         let files: Vec<_> = artifacts

@@ -10,6 +10,7 @@ use packwright_interface::PlannerKind;
 use packwright_pipeline::episode::cell_of;
 use packwright_pipeline::evaluate::{CaseResult, Row, markdown, run_case};
 use packwright_pipeline::models::{choose_planner, taught};
+use packwright_pipeline::reach::RobotWorkspace;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -39,7 +40,8 @@ struct EvalReport<'a> {
 }
 
 pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
-    let compiled = match packwright_compiler::check(&FsLoader, &args.files) {
+    let compiled = match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new())
+    {
         Ok(c) => c,
         Err(failed) => return Ok(super::report_failure(&failed, args.json)),
     };

@@ -7,6 +7,7 @@ use packwright_interface::outcome::{Outcome, PlannerKind, Report};
 use packwright_motion::execute::{self, Planner};
 use packwright_pipeline::episode::{episode, find_setup};
 use packwright_pipeline::models::{choose_planner, taught};
+use packwright_pipeline::reach::RobotWorkspace;
 
 /// The report as JSON, with the task's name.
 pub fn to_json(name: &str, r: &Report) -> serde_json::Value {
@@ -18,7 +19,8 @@ pub fn to_json(name: &str, r: &Report) -> serde_json::Value {
 }
 
 pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
-    let compiled = match packwright_compiler::check(&FsLoader, &args.files) {
+    let compiled = match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new())
+    {
         Ok(c) => c,
         Err(failed) => return Ok(super::report_failure(&failed, false)),
     };

@@ -21,13 +21,15 @@
 //! products' positions: what is packed or missing is inferred from them.
 
 mod learned;
+mod reachable;
 mod reasoner;
 mod scripted;
 mod station;
 
 pub use learned::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps, tolerance};
+pub use reachable::{Reachability, Unreached};
 pub use reasoner::{demonstrated_decisions, expected_next, graph, reasoner_trial};
-pub use station::{HOME_HEIGHT, Load, Unchecked, checked_samples, home, reach};
+pub use station::{HOME_HEIGHT, Load, Unchecked, checked_samples, home, home_tip, reach};
 
 use packwright_interface::outcome::{PlannerKind, Report};
 use packwright_interface::record::MotionLog;

@@ -461,7 +461,12 @@ pub fn reach(
 /// Every inverse-kinematics solution for the cup tip at `tip` pointing
 /// down with `yaw`, nearest `near` first, not yet checked for collisions
 /// (callers check lazily: the nearest free one is usually the first).
-fn solutions(checker: &Checker, tip: Point3<f64>, yaw: f64, near: &Joints) -> Vec<Joints> {
+pub(crate) fn solutions(
+    checker: &Checker,
+    tip: Point3<f64>,
+    yaw: f64,
+    near: &Joints,
+) -> Vec<Joints> {
     let (arm, base) = (checker.arm(), checker.base());
     let flange = tool_down_pose(tip, yaw, checker.suction());
     let mut candidates: Vec<Joints> = if arm.ur.is_some() {
@@ -476,12 +481,36 @@ fn solutions(checker: &Checker, tip: Point3<f64>, yaw: f64, near: &Joints) -> Ve
     candidates
 }
 
+/// Where the cup tip starts: [`HOME_HEIGHT`] over the middle of the
+/// pending area.
+pub fn home_tip(cell: &CellScene) -> [f64; 3] {
+    let (lo, hi) = cell.pending;
+    [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, HOME_HEIGHT]
+}
+
 /// The start pose: the cup [`HOME_HEIGHT`] over the middle of the pending
 /// area, pointing down, collision-free, on the branch nearest the usual UR
-/// "ready" pose.
+/// "ready" pose among those that can go straight down from there to
+/// [`START_CHECK_HEIGHT`] over the table (any free one if none can). A
+/// branch that cannot (the upper arm pointing back over the table, the
+/// elbow below it) sends the first descent through the arm's stretched
+/// pose, folding the forearm into the cup.
 pub fn home(arm: &Arm, cell: &CellScene) -> Option<Joints> {
-    let (lo, hi) = cell.pending;
-    let tip = Point3::new((lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, HOME_HEIGHT);
+    let checker = Checker::new(arm, cell);
+    let top = home_tip(cell);
+    let low = Point3::new(top[0], top[1], START_CHECK_HEIGHT);
     let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
-    reach(&Checker::new(arm, cell), tip, 0.0, &ready, Load::FREE)
+    let free: Vec<Joints> = solutions(&checker, Point3::from(top), 0.0, &ready)
+        .into_iter()
+        .filter(|q| checker.check(q, None, None).is_none())
+        .collect();
+    let descends = |q: &&Joints| {
+        reach(&checker, low, 0.0, q, Load::FREE)
+            .is_some_and(|down| checker.check_motion(q, &down, None, None).is_none())
+    };
+    free.iter().find(descends).or(free.first()).copied()
 }
+
+/// How low over the table [`home`] checks that the arm can go straight
+/// down from its start (a hover over a small product).
+pub const START_CHECK_HEIGHT: f64 = 0.12;

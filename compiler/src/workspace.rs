@@ -1,0 +1,286 @@
+//! Phase 3b: what the robot can reach. The compiler knows no kinematics:
+//! it asks a [`Workspace`] (the robot half implements it, see
+//! `packwright_pipeline::reach`) whether every pose of picking a product
+//! where it stands, and of placing it in a slot, can be reached, and turns
+//! each "no" into an [`Error::Unreachable`] at the statement that asked
+//! for it. Runs only on a model the geometric checks passed.
+//!
+//! What is asked: every (product, slot) pair an order, a demo's or
+//! scenario's moved product, or a `choose` allows, picked from where that
+//! product stands and placed in that slot (a product nothing packs is not
+//! asked about). Each distinct question is asked
+//! once and reported once. Jitter is not sampled: the nominal positions
+//! are checked.
+
+use crate::error::Error;
+use crate::model::{Choose, Inventory, Model, Placed};
+use crate::source::Loc;
+use serde::Serialize;
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt;
+
+/// A pose the robot needs: where it starts, and the six poses of a pick
+/// and place (README, "How the robot packs"): three of picking, three of
+/// placing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Pose {
+    /// The start: the cup over the middle of the pending area.
+    Start,
+    /// Above the product, before the descent.
+    Hover,
+    /// The cup on the product's top face (suction on).
+    TopFace,
+    /// The product lifted by the cell's `lift`.
+    Lift,
+    /// The carrying point between the product and the slot.
+    Approach,
+    /// Above the slot, the product clear of the box's rim.
+    AboveSlot,
+    /// The product just above the box floor (suction off), or as high as
+    /// the release may be raised.
+    Release,
+}
+
+impl Pose {
+    /// Whether the pose belongs to picking (depends on the product's place
+    /// only, not on the slot).
+    pub fn is_picking(self) -> bool {
+        // (The start is not: it is the cell's.)
+        matches!(self, Pose::Hover | Pose::TopFace | Pose::Lift)
+    }
+}
+
+impl fmt::Display for Pose {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Pose::Start => "its start pose over the middle of the pending area",
+            Pose::Hover => "the hover above the product",
+            Pose::TopFace => "the product's top face",
+            Pose::Lift => "the lift",
+            Pose::Approach => "the approach point",
+            Pose::AboveSlot => "the point above the slot",
+            Pose::Release => "the release in the slot",
+        })
+    }
+}
+
+/// What the robot was doing when a pose was out of reach.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Task {
+    /// Starting in cell `cell`.
+    Start { cell: String },
+    /// Picking `product`, its centre at `position`.
+    Pick { product: String, position: [f64; 2] },
+    /// Putting `product`, picked at `position`, in `slot`.
+    Place {
+        product: String,
+        position: [f64; 2],
+        slot: String,
+    },
+}
+
+impl fmt::Display for Task {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Task::Start { cell } => write!(f, "in cell `{cell}`"),
+            Task::Pick { product, position } => write!(
+                f,
+                "when it picks product `{product}` at ({:.3}, {:.3})",
+                position[0], position[1]
+            ),
+            Task::Place {
+                product,
+                position,
+                slot,
+            } => write!(
+                f,
+                "when it puts product `{product}` (picked at ({:.3}, {:.3})) in slot `{slot}`",
+                position[0], position[1]
+            ),
+        }
+    }
+}
+
+/// A pose the robot cannot reach: which, and where the tool tip would be
+/// (world frame, m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unreached {
+    pub pose: Pose,
+    pub tip: [f64; 3],
+}
+
+/// The robot's answers. Implementations must be deterministic.
+pub trait Workspace {
+    /// The start pose of cell `cell`, if it cannot be reached.
+    fn start(&self, m: &Model, cell: usize) -> Option<Unreached>;
+
+    /// Picking product `product` (an index into `m.products`) whose centre
+    /// stands at `at` in cell `cell`: the first pose that cannot be
+    /// reached, if any.
+    fn pick(&self, m: &Model, cell: usize, product: usize, at: [f64; 2]) -> Option<Unreached>;
+
+    /// Placing it, picked at `at`, into slot `slot` of the cell: the
+    /// first placing pose (approach, above the slot, release) that cannot
+    /// be reached, if any.
+    fn place(
+        &self,
+        m: &Model,
+        cell: usize,
+        product: usize,
+        at: [f64; 2],
+        slot: usize,
+    ) -> Option<Unreached>;
+}
+
+/// A workspace that reaches everything: for tools that have no robot model
+/// (formatting, the compiler's own tests and benchmarks). Every command
+/// that executes or trains uses the robot's.
+pub struct Anywhere;
+
+impl Workspace for Anywhere {
+    fn start(&self, _: &Model, _: usize) -> Option<Unreached> {
+        None
+    }
+
+    fn pick(&self, _: &Model, _: usize, _: usize, _: [f64; 2]) -> Option<Unreached> {
+        None
+    }
+
+    fn place(&self, _: &Model, _: usize, _: usize, _: [f64; 2], _: usize) -> Option<Unreached> {
+        None
+    }
+}
+
+/// A product's place, as bits, so that each question is asked once.
+type Place = (usize, usize, [u64; 2]);
+
+struct Asker<'a> {
+    m: &'a Model,
+    ws: &'a dyn Workspace,
+    /// Picking questions asked, and whether every pose was reached.
+    picked: BTreeMap<Place, bool>,
+    placed: BTreeSet<(Place, usize)>,
+    errors: Vec<Error>,
+}
+
+impl Asker<'_> {
+    /// Whether product `entry` can be picked at `at` (asked once).
+    fn pick(&mut self, inv: &Inventory, entry: usize, at: [f64; 2], loc: Loc) -> bool {
+        let product = inv.entries[entry].product;
+        let place = (inv.cell, product, at.map(f64::to_bits));
+        if let Some(&reached) = self.picked.get(&place) {
+            return reached;
+        }
+        let unreached = self.ws.pick(self.m, inv.cell, product, at);
+        if let Some(u) = unreached {
+            self.errors.push(Error::Unreachable {
+                at: loc,
+                task: Task::Pick {
+                    product: self.m.products[product].name.clone(),
+                    position: at,
+                },
+                pose: u.pose,
+                tip: u.tip,
+            });
+        }
+        self.picked.insert(place, unreached.is_none());
+        unreached.is_none()
+    }
+
+    /// Placing is asked once its picking was reached (the placing poses
+    /// start from the lift).
+    /// A picking failure is reported at `at_loc` (where the product's
+    /// place is written), a placing one at `loc` (what asked for the slot).
+    fn place(&mut self, inv: &Inventory, entry: usize, at: ([f64; 2], Loc), slot: usize, loc: Loc) {
+        let (at, at_loc) = at;
+        if !self.pick(inv, entry, at, at_loc) {
+            return;
+        }
+        let product = inv.entries[entry].product;
+        let place = (inv.cell, product, at.map(f64::to_bits));
+        if !self.placed.insert((place, slot)) {
+            return;
+        }
+        if let Some(u) = self.ws.place(self.m, inv.cell, product, at, slot) {
+            self.errors.push(Error::Unreachable {
+                at: loc,
+                task: Task::Place {
+                    product: self.m.products[product].name.clone(),
+                    position: at,
+                    slot: self.m.cells[inv.cell].slots[slot].name.clone(),
+                },
+                pose: u.pose,
+                tip: u.tip,
+            });
+        }
+    }
+
+    fn moved(&mut self, inv: &Inventory, order: usize, placed: &[Placed]) {
+        for p in placed {
+            let slot = self.m.orders[order]
+                .assignment
+                .iter()
+                .find(|a| a.entry == p.entry)
+                .map(|a| a.slot);
+            if let Some(slot) = slot {
+                self.place(inv, p.entry, (p.at, p.loc), slot, p.loc);
+            }
+        }
+    }
+
+    fn choose(&mut self, inv: &Inventory, c: &Choose) {
+        for &e in &c.entries {
+            for &s in &c.slots {
+                let entry = &inv.entries[e];
+                self.place(inv, e, (entry.at, entry.loc), s, c.loc);
+            }
+        }
+    }
+}
+
+/// Every pose the model's orders, demonstrations and scenarios need,
+/// asked of `ws`; one error per unreachable question.
+pub fn check(m: &Model, ws: &dyn Workspace) -> Vec<Error> {
+    let mut a = Asker {
+        m,
+        ws,
+        picked: BTreeMap::new(),
+        placed: BTreeSet::new(),
+        errors: Vec::new(),
+    };
+    for (i, cell) in m.cells.iter().enumerate() {
+        if let Some(u) = ws.start(m, i) {
+            a.errors.push(Error::Unreachable {
+                at: cell.loc,
+                task: Task::Start {
+                    cell: cell.name.clone(),
+                },
+                pose: u.pose,
+                tip: u.tip,
+            });
+        }
+    }
+    for order in &m.orders {
+        let inv = &m.inventories[order.inventory];
+        for asg in &order.assignment {
+            let entry = &inv.entries[asg.entry];
+            a.place(inv, asg.entry, (entry.at, entry.loc), asg.slot, asg.loc);
+        }
+    }
+    for demo in &m.demos {
+        let inv = &m.inventories[m.orders[demo.order].inventory];
+        a.moved(inv, demo.order, &demo.at);
+    }
+    for sc in &m.scenarios {
+        let inv = &m.inventories[m.orders[sc.order].inventory];
+        a.moved(inv, sc.order, &sc.at);
+    }
+    for d in &m.demo_sets {
+        a.choose(&m.inventories[d.inventory], &d.choose);
+    }
+    for s in &m.scenario_sets {
+        a.choose(&m.inventories[s.inventory], &s.choose);
+    }
+    a.errors
+}

@@ -1,0 +1,172 @@
+//! Whether the expert can reach every pose of a pick and place before
+//! anything moves: the same sub-goals ([`expert::picking`],
+//! [`expert::placing`]), the same inverse kinematics and collision check
+//! against the cell's fixtures, the same raised release
+//! ([`Station::solve`](super::station::Station::solve)) as `execute`, and
+//! the straight moves between them (the descent to the top face, the lift,
+//! the descent into the slot). What it does not know: other products
+//! standing in the cell, and the carrying motions (lift to approach to
+//! above the slot: a swing or a search); `execute` reports those.
+
+use super::station::{Load, MAX_RAISES, RAISE_STEP, home, home_tip, solutions};
+use crate::collision::{Checker, Held};
+use crate::expert::{self, SubGoal};
+use nalgebra::{Point3, Vector3};
+use packwright_interface::outcome::Stage;
+use packwright_interface::scene::CellScene;
+use packwright_kinematics::{Arm, Joints};
+use std::f64::consts::FRAC_PI_2;
+
+/// The most any joint may turn on a straight descent or lift between two
+/// solutions of the same arm shape (rad); solutions further apart belong
+/// to another shape, and the straight motion between them is no descent.
+pub const MAX_DESCENT_TURN: f64 = 1.0;
+
+/// A sub-goal no inverse-kinematics solution reaches free of the cell's
+/// fixtures.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unreached {
+    pub stage: Stage,
+    /// From 1, as in [`Failure::Unreachable`](packwright_interface::outcome::Failure).
+    pub subgoal: usize,
+    pub tip: [f64; 3],
+}
+
+/// The reach of one arm in one cell.
+pub struct Reachability {
+    checker: Checker,
+    cell: CellScene,
+    /// The start pose ([`home`]), if the arm has one in this cell.
+    start: Option<Joints>,
+    /// Where the inverse kinematics starts (matters for arms without a
+    /// closed-form solution): the start pose, or the UR "ready" pose.
+    near: Joints,
+}
+
+impl Reachability {
+    pub fn new(arm: &Arm, cell: &CellScene) -> Reachability {
+        let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
+        let start = home(arm, cell);
+        Reachability {
+            checker: Checker::new(arm, cell),
+            cell: cell.clone(),
+            start,
+            near: start.unwrap_or(ready),
+        }
+    }
+
+    /// The start pose, or where its cup tip would be ([`home`]: over the
+    /// middle of the pending area) when no free solution reaches it.
+    pub fn start(&self) -> Result<Joints, [f64; 3]> {
+        self.start.ok_or_else(|| home_tip(&self.cell))
+    }
+
+    /// The free solutions of `goal` at the first of `heights` that has any
+    /// (the release may be raised), reached by a straight joint motion from
+    /// one of `from` when given (the descents and the lift, which the
+    /// expert moves straight; only from solutions of the same arm shape,
+    /// no joint turning more than [`MAX_DESCENT_TURN`]).
+    fn step(
+        &self,
+        goal: &SubGoal,
+        heights: &[f64],
+        from: Option<&[Joints]>,
+        load: Load,
+    ) -> Vec<Joints> {
+        let joined = |q: &Joints| {
+            from.is_none_or(|from| {
+                from.iter().any(|p| {
+                    p.iter()
+                        .zip(q)
+                        .all(|(a, b)| (a - b).abs() <= MAX_DESCENT_TURN)
+                        && self
+                            .checker
+                            .check_motion(p, q, load.held, load.ignore)
+                            .is_none()
+                })
+            })
+        };
+        heights
+            .iter()
+            .map(|z| {
+                let tip = Point3::new(goal.tip[0], goal.tip[1], *z);
+                solutions(&self.checker, tip, 0.0, &self.near)
+                    .into_iter()
+                    .filter(|q| self.checker.check(q, load.held, load.ignore).is_none())
+                    .filter(|q| joined(q))
+                    .collect::<Vec<_>>()
+            })
+            .find(|reached| !reached.is_empty())
+            .unwrap_or_default()
+    }
+
+    fn picking_goals(&self, size: [f64; 3], at: [f64; 2]) -> [SubGoal; 3] {
+        expert::picking([at[0], at[1], size[2] / 2.0], size[2], self.cell.lift)
+    }
+
+    /// Picking a product of `size` whose centre stands at `at` (on the
+    /// table, square): the first sub-goal no free solution reaches (the
+    /// top face and the lift: straight from a free solution of the one
+    /// before).
+    pub fn picking(&self, size: [f64; 3], at: [f64; 2]) -> Result<(), Unreached> {
+        let mut from: Option<Vec<Joints>> = None;
+        for (k, goal) in self.picking_goals(size, at).iter().enumerate() {
+            let reached = self.step(goal, &[goal.tip[2]], from.as_deref(), Load::FREE);
+            if reached.is_empty() {
+                return Err(Unreached {
+                    stage: Stage::Picking,
+                    subgoal: k + 1,
+                    tip: goal.tip,
+                });
+            }
+            from = Some(reached);
+        }
+        Ok(())
+    }
+
+    /// Placing it, picked at `at`, in slot `slot`: the first sub-goal no
+    /// free solution reaches (the release: straight down from a free
+    /// solution above the slot, at some height up to that point's, for the
+    /// product then drops the rest; the approach and the point above the
+    /// slot are joined by a swing or a search, not checked here).
+    pub fn placing(&self, size: [f64; 3], at: [f64; 2], slot: usize) -> Result<(), Unreached> {
+        let Some(spec) = self.cell.slots.get(slot) else {
+            return Err(Unreached {
+                stage: Stage::Placing,
+                subgoal: 2,
+                tip: [f64::NAN; 3],
+            });
+        };
+        let lift = self.picking_goals(size, at)[2].tip;
+        let goals = expert::placing(
+            lift,
+            spec.position,
+            size[2],
+            expert::box_height(&self.cell, slot),
+            [self.cell.base[0], self.cell.base[1]],
+        );
+        let held = Held::under_cup("held", size, self.cell.suction, Vector3::zeros());
+        let load = Load::holding(&held);
+        let ceiling = goals[1].tip[2];
+        let raised: Vec<f64> = (0..=MAX_RAISES)
+            .map(|i| goals[2].tip[2] + RAISE_STEP * f64::from(i))
+            .take_while(|z| *z <= ceiling)
+            .collect();
+        let mut above = Vec::new();
+        for (k, goal) in goals.iter().enumerate() {
+            let reached = match k {
+                2 => self.step(goal, &raised, Some(&above), load),
+                _ => self.step(goal, &[goal.tip[2]], None, load),
+            };
+            if reached.is_empty() {
+                return Err(Unreached {
+                    stage: Stage::Placing,
+                    subgoal: k + 1,
+                    tip: goal.tip,
+                });
+            }
+            above = reached;
+        }
+        Ok(())
+    }
+}

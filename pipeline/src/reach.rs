@@ -1,0 +1,83 @@
+//! The robot's answers to the compiler's reach questions
+//! ([`packwright_compiler::Workspace`]): the cell's arm (the UR10 or its
+//! URDF) and the expert's poses, through [`Reachability`]. Every command
+//! that reads `.pack` files for the robot (`check`, `compile`, `execute`,
+//! `eval`) compiles with it, so that `check` accepts only what the expert
+//! can reach.
+
+use crate::episode::{arm_of, scene_of};
+use packwright_compiler::Workspace;
+use packwright_compiler::emit::cell_record;
+use packwright_compiler::model::Model;
+use packwright_compiler::workspace::{Pose, Unreached};
+use packwright_interface::outcome::Stage;
+use packwright_motion::execute::{self, Reachability};
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+
+/// The robot's workspace, one [`Reachability`] per cell, built when first
+/// asked. A cell whose arm cannot be built (an unreadable URDF, reported
+/// by the compiler itself) is not asked about.
+#[derive(Default)]
+pub struct RobotWorkspace {
+    cells: RefCell<BTreeMap<usize, Option<Reachability>>>,
+}
+
+impl RobotWorkspace {
+    pub fn new() -> RobotWorkspace {
+        RobotWorkspace::default()
+    }
+
+    fn ask<T>(&self, m: &Model, cell: usize, f: impl FnOnce(&Reachability) -> T) -> Option<T> {
+        let mut cells = self.cells.borrow_mut();
+        let reach = cells.entry(cell).or_insert_with(|| {
+            let record = cell_record(m.cells.get(cell)?);
+            let arm = arm_of(&record.robot).ok()?;
+            Some(Reachability::new(&arm, &scene_of(&record)))
+        });
+        reach.as_ref().map(f)
+    }
+}
+
+fn pose(u: execute::Unreached) -> Unreached {
+    let pose = match (u.stage, u.subgoal) {
+        (Stage::Picking, 1) => Pose::Hover,
+        (Stage::Picking, 2) => Pose::TopFace,
+        (Stage::Picking, _) => Pose::Lift,
+        (Stage::Placing, 1) => Pose::Approach,
+        (Stage::Placing, 2) => Pose::AboveSlot,
+        (Stage::Placing, _) => Pose::Release,
+    };
+    Unreached { pose, tip: u.tip }
+}
+
+impl Workspace for RobotWorkspace {
+    fn start(&self, m: &Model, cell: usize) -> Option<Unreached> {
+        self.ask(m, cell, |r| {
+            r.start().err().map(|tip| Unreached {
+                pose: Pose::Start,
+                tip,
+            })
+        })
+        .flatten()
+    }
+
+    fn pick(&self, m: &Model, cell: usize, product: usize, at: [f64; 2]) -> Option<Unreached> {
+        let size = m.products.get(product)?.size;
+        self.ask(m, cell, |r| r.picking(size, at).err().map(pose))
+            .flatten()
+    }
+
+    fn place(
+        &self,
+        m: &Model,
+        cell: usize,
+        product: usize,
+        at: [f64; 2],
+        slot: usize,
+    ) -> Option<Unreached> {
+        let size = m.products.get(product)?.size;
+        self.ask(m, cell, |r| r.placing(size, at, slot).err().map(pose))
+            .flatten()
+    }
+}
