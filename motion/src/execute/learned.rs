@@ -349,8 +349,12 @@ impl<W: World> Learned<'_, W> {
     fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<(), Failure> {
         let started = Instant::now();
         let load = Load::ignoring(name);
+        // The released product where it lies (its last observed place was
+        // under the cup).
+        let obs = self.station.world.observe();
+        self.station.sync_products(&obs);
         let s = &self.station;
-        let start = s.world.observe().joints;
+        let start = obs.joints;
         // Straight up from where the cup let go: a learned "above" a few
         // millimetres off in x or y would drag the cup along a wall.
         let [x, y, z0] = s.tip(&start);

@@ -199,8 +199,10 @@ impl<W: World> Scripted<'_, W> {
         };
         self.run_stage(plan, 0.0, carrying, Some(place))?;
 
-        // Back up from the released product.
+        // Back up from the released product, which the checker now sees
+        // where it lies (its last observed place was under the cup).
         let obs = self.station.world.observe();
+        self.station.sync_products(&obs);
         let up = [SubGoal {
             tip: [slot[0], slot[1], placing[1].tip[2]],
             suction: Suction::Keep,
