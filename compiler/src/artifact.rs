@@ -5,6 +5,19 @@ use serde::{Deserialize, Serialize};
 
 pub const SCHEMA_VERSION: u32 = 1;
 
+/// The `schema` string of each artifact (for `graphs.safetensors`, the
+/// value of its one metadata key, `schema`): written by `emit`, checked by
+/// every reader.
+pub mod schema {
+    pub const MANIFEST: &str = "packwright.manifest";
+    pub const LABELS: &str = "packwright.labels";
+    pub const ORDERS: &str = "packwright.orders";
+    pub const SCENARIOS: &str = "packwright.scenarios";
+    /// Carries its version (`SCHEMA_VERSION`): the tensors have no field
+    /// for it.
+    pub const GRAPHS: &str = "packwright.graphs/1";
+}
+
 /// `manifest.json`
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct Manifest {

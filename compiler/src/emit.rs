@@ -159,7 +159,7 @@ fn manifest(sources: &SourceMap, m: &Model, ex: &Expanded, g: &Graphs) -> Manife
         })
         .collect();
     Manifest {
-        schema: "packwright.manifest".into(),
+        schema: schema::MANIFEST.into(),
         version: SCHEMA_VERSION,
         sources: sources
             .files()
@@ -191,7 +191,7 @@ fn manifest(sources: &SourceMap, m: &Model, ex: &Expanded, g: &Graphs) -> Manife
 
 fn labels(m: &Model) -> LabelsFile {
     LabelsFile {
-        schema: "packwright.labels".into(),
+        schema: schema::LABELS.into(),
         version: SCHEMA_VERSION,
         cells: m
             .cells
@@ -256,7 +256,7 @@ pub fn cell_record(c: &Cell) -> CellRecord {
 
 fn world(m: &Model) -> WorldFile {
     WorldFile {
-        schema: "packwright.orders".into(),
+        schema: schema::ORDERS.into(),
         version: SCHEMA_VERSION,
         cells: m.cells.iter().map(cell_record).collect(),
         products: m
@@ -311,7 +311,7 @@ fn world(m: &Model) -> WorldFile {
 
 fn scenarios(m: &Model, ex: &Expanded) -> ScenariosFile {
     ScenariosFile {
-        schema: "packwright.scenarios".into(),
+        schema: schema::SCENARIOS.into(),
         version: SCHEMA_VERSION,
         suites: ex
             .suites
@@ -403,6 +403,6 @@ fn tensors(g: &Graphs) -> Result<Vec<u8>, Error> {
         })
         .collect::<Result<Vec<_>, _>>()
         .map_err(internal)?;
-    let metadata = HashMap::from([("schema".to_owned(), "packwright.graphs/1".to_owned())]);
+    let metadata = HashMap::from([("schema".to_owned(), schema::GRAPHS.to_owned())]);
     safetensors::serialize(views, Some(metadata)).map_err(internal)
 }

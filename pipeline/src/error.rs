@@ -10,9 +10,16 @@ use thiserror::Error;
 pub enum PipelineError {
     #[error("cannot read {path}: {reason}")]
     Read { path: PathBuf, reason: String },
-    /// A compiled artifact that does not hold what its schema says.
-    #[error("{file}: {problem}")]
-    Artifact { file: String, problem: String },
+    /// A file of a compiled directory that breaks the artifacts' schema or
+    /// disagrees with the other files: which file, where in it (a path
+    /// such as `demonstrations[3].start[1].at`, empty for the whole file)
+    /// and what is wrong (`crate::artifacts` checks it).
+    #[error("{}{}: {problem}", file.display(), at_field(field))]
+    Invalid {
+        file: PathBuf,
+        field: String,
+        problem: ArtifactProblem,
+    },
     #[error("{file} has no {what} `{name}`")]
     Unknown {
         file: &'static str,
@@ -40,6 +47,69 @@ pub enum PipelineError {
     },
     #[error("{0}")]
     Selection(String),
+}
+
+/// `, FIELD` after the file name, or nothing for a whole-file problem.
+fn at_field(field: &str) -> String {
+    if field.is_empty() {
+        String::new()
+    } else {
+        format!(", {field}")
+    }
+}
+
+/// What is wrong at one place of a compiled artifact. The values are data
+/// for callers; `Display` is for people.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ArtifactProblem {
+    /// Not JSON, or not of the schema's shape (a wrong type, a number out
+    /// of range for its type, a missing field): the parser's reason.
+    #[error("not a packwright artifact ({reason})")]
+    Malformed { reason: String },
+    /// `graphs.safetensors` is not a safetensors file: the reader's reason.
+    #[error("not a safetensors file ({reason})")]
+    NotSafetensors { reason: String },
+    #[error("schema `{found}`, expected `{expected}`")]
+    Schema { found: String, expected: String },
+    #[error(
+        "schema version {found}; this packwright reads version {expected}: compile the sources again"
+    )]
+    Version { found: u32, expected: u32 },
+    /// A NaN or infinity, or a number beyond what the single-precision
+    /// computations downstream (the simulator, the networks) can hold.
+    #[error("{value} is not a finite number")]
+    NotFinite { value: f64 },
+    /// A length or a size that must be greater than `bound`.
+    #[error("{value} is not greater than {bound}")]
+    NotAbove { value: f64, bound: f64 },
+    /// A length in metres outside its checked range.
+    #[error("{value} m is outside {min}-{max} m")]
+    LengthOutOfRange { value: f64, min: f64, max: f64 },
+    /// An integer (a label, a node, an index, a flag) outside `min..=max`.
+    #[error("{value} is outside {min}..={max}")]
+    OutOfRange { value: i64, min: i64, max: i64 },
+    /// A name that names nothing of its kind where it is used.
+    #[error("no {what} is named `{name}`")]
+    UnknownName { what: &'static str, name: String },
+    /// A name given twice where names are unique.
+    #[error("{what} `{name}` is given twice")]
+    Duplicate { what: &'static str, name: String },
+    /// A count (or a first index) that is not what the files hold.
+    #[error("{found}, but the files hold {expected}")]
+    CountMismatch { expected: usize, found: usize },
+    /// A value that must equal another one in the files (shown as text).
+    #[error("{found}, expected {expected}")]
+    Differs { expected: String, found: String },
+    /// A tensor of the schema that the file does not hold.
+    #[error("no such tensor")]
+    MissingTensor,
+    #[error("dtype {found}, expected {expected}")]
+    Dtype { found: String, expected: String },
+    #[error("shape {found:?}, expected {expected:?}")]
+    Shape {
+        found: Vec<usize>,
+        expected: Vec<usize>,
+    },
 }
 
 pub type Result<T, E = PipelineError> = std::result::Result<T, E>;

@@ -3,11 +3,11 @@
 //! follow, the reasoner's decisions they imply, and the expert's replays
 //! of them (motion demonstrations).
 
-use crate::artifacts::read_json;
+use crate::artifacts::CompiledDir;
 use crate::episode::{Episode, demonstration_episode};
 use crate::error::{PipelineError, Result};
 use crate::replay::{motion_examples, replay_all};
-use packwright_compiler::artifact::{DemonstrationRecord, Manifest, WorldFile};
+use packwright_compiler::artifact::{DemonstrationRecord, WorldFile};
 use packwright_interface::record::MotionLog;
 use packwright_interface::{Graph, SequenceRule, world::Seen};
 use packwright_motion::execute::demonstrated_decisions;
@@ -58,10 +58,12 @@ impl Replayed {
 
 impl Lesson {
     /// The demonstrations of the blocks `demos` (all when empty) in the
-    /// compiled directory `dir`. They must all be in one cell.
+    /// compiled directory `dir`, whose artifacts are checked first
+    /// ([`CompiledDir::read`]).
     pub fn read(dir: &Path, demos: &[String]) -> Result<Lesson> {
-        let manifest: Manifest = read_json(&dir.join("manifest.json"))?;
-        let world: WorldFile = read_json(&dir.join("orders.json"))?;
+        let compiled = CompiledDir::read(dir)?;
+        let manifest = compiled.manifest();
+        let world = compiled.world().clone();
         let known: BTreeSet<&str> = manifest
             .demo_blocks
             .iter()

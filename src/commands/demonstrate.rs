@@ -4,15 +4,14 @@ use crate::Exit;
 use crate::cli::DemonstrateArgs;
 use crate::fsio::write_file_atomically;
 use anyhow::bail;
-use packwright_compiler::artifact::{Manifest, WorldFile};
-use packwright_pipeline::artifacts::read_json;
+use packwright_pipeline::artifacts::CompiledDir;
 use packwright_pipeline::motion_file::{merge, motion_file};
 use packwright_pipeline::replay::replay_all;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
-    let manifest: Manifest = read_json(&args.dir.join("manifest.json"))?;
-    let world: WorldFile = read_json(&args.dir.join("orders.json"))?;
+    let compiled = CompiledDir::read(&args.dir)?;
+    let (manifest, world) = (compiled.manifest(), compiled.world());
     if manifest.demonstrations.is_empty() {
         bail!(
             "{} holds no demonstrations: compile files with `demo` or `demos` blocks",
@@ -22,7 +21,7 @@ pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
     let total = manifest.demonstrations.len();
     let done = AtomicUsize::new(0);
     let demos: Vec<_> = manifest.demonstrations.iter().collect();
-    let logs = replay_all(&world, &demos, &|| {
+    let logs = replay_all(world, &demos, &|| {
         let n = done.fetch_add(1, Ordering::Relaxed) + 1;
         if !args.json && (n.is_multiple_of(10) || n == total) {
             err!("\rrecorded {n}/{total} demonstrations");

@@ -2,64 +2,10 @@
 
 use crate::Exit;
 use crate::cli::ShowArgs;
-use anyhow::{Context, bail};
 use packwright_compiler::artifact::*;
-use safetensors::SafeTensors;
-use serde::de::DeserializeOwned;
+use packwright_pipeline::artifacts::CompiledDir;
 use sha2::{Digest, Sha256};
 use std::fmt::Write;
-use std::path::Path;
-
-/// The tensors of `graphs.safetensors`, in documented order.
-pub const TENSORS: [&str; 8] = tensor::ALL;
-
-fn read_json<T: DeserializeOwned>(dir: &Path, name: &str) -> anyhow::Result<T> {
-    let path = dir.join(name);
-    let bytes = std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
-    serde_json::from_slice(&bytes)
-        .with_context(|| format!("{} is not a packwright artifact", path.display()))
-}
-
-struct Tensor {
-    name: &'static str,
-    dtype: String,
-    shape: Vec<usize>,
-    /// Values as f64, row-major.
-    values: Vec<f64>,
-}
-
-fn read_tensors(bytes: &[u8]) -> anyhow::Result<Vec<Tensor>> {
-    let st =
-        SafeTensors::deserialize(bytes).context("graphs.safetensors is not a safetensors file")?;
-    let mut out = Vec::new();
-    for name in TENSORS {
-        let view = st
-            .tensor(name)
-            .with_context(|| format!("graphs.safetensors has no tensor `{name}`"))?;
-        let data = view.data();
-        let values: Vec<f64> = match view.dtype() {
-            safetensors::Dtype::F32 => data
-                .chunks_exact(4)
-                .map(|c| f64::from(f32::from_le_bytes([c[0], c[1], c[2], c[3]])))
-                .collect(),
-            safetensors::Dtype::I64 => data
-                .chunks_exact(8)
-                .map(|c| {
-                    i64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]) as f64
-                })
-                .collect(),
-            safetensors::Dtype::U8 => data.iter().map(|&b| f64::from(b)).collect(),
-            other => bail!("tensor `{name}` has an unexpected dtype {other:?}"),
-        };
-        out.push(Tensor {
-            name,
-            dtype: format!("{:?}", view.dtype()),
-            shape: view.shape().to_vec(),
-            values,
-        });
-    }
-    Ok(out)
-}
 
 fn p2(p: [f64; 2]) -> String {
     format!("({:.3}, {:.3})", p[0], p[1])
@@ -70,23 +16,22 @@ fn p3(p: [f64; 3]) -> String {
 }
 
 pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
-    let dir = &args.dir;
-    let manifest: Manifest = read_json(dir, "manifest.json")?;
-    let labels: LabelsFile = read_json(dir, "labels.json")?;
-    let world: WorldFile = read_json(dir, "orders.json")?;
-    let scenarios: ScenariosFile = read_json(dir, "scenarios.json")?;
-    if manifest.version != SCHEMA_VERSION {
-        bail!(
-            "{} was written with schema version {}; this packwright reads version {SCHEMA_VERSION}: compile again",
-            dir.display(),
-            manifest.version
-        );
-    }
-    let graphs_path = dir.join("graphs.safetensors");
-    let graph_bytes = std::fs::read(&graphs_path)
-        .with_context(|| format!("cannot read {}", graphs_path.display()))?;
-    let tensors = read_tensors(&graph_bytes)?;
-    let graphs_sha = format!("{:x}", Sha256::digest(&graph_bytes));
+    // One reader for every command: the artifacts are checked before
+    // anything is shown.
+    let compiled = CompiledDir::read(&args.dir)?;
+    let graphs = compiled.graphs()?;
+    let (manifest, labels, world, scenarios) = (
+        compiled.manifest(),
+        compiled.labels(),
+        compiled.world(),
+        compiled.scenarios(),
+    );
+    let graphs_sha = format!("{:x}", Sha256::digest(&graphs.bytes));
+    let tensors: Vec<(&str, String, Vec<usize>)> = graphs
+        .tensors()
+        .into_iter()
+        .map(|(name, dtype, shape)| (name, format!("{dtype:?}"), shape))
+        .collect();
     let suite_stats = |s: &SuiteRecord| {
         (
             s.cases
@@ -109,7 +54,7 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
                 "held_out_combinations": b.held_out_combinations, "demonstrations": b.demonstrations, "samples": b.samples,
             })).collect::<Vec<_>>(),
             "graphs_sha256": graphs_sha,
-            "tensors": tensors.iter().map(|t| serde_json::json!({"name": t.name, "dtype": t.dtype, "shape": t.shape})).collect::<Vec<_>>(),
+            "tensors": tensors.iter().map(|(name, dtype, shape)| serde_json::json!({"name": name, "dtype": dtype, "shape": shape})).collect::<Vec<_>>(),
             "suites": scenarios.suites.iter().map(|s| {
                 let (human, missing) = suite_stats(s);
                 serde_json::json!({"name": s.name, "kind": s.kind, "cell": s.cell, "inventory": s.inventory, "order": s.order,
@@ -226,54 +171,37 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
         }
     }
     writeln!(o, "\ngraphs.safetensors  sha256:{}", &graphs_sha[..16])?;
-    for t in &tensors {
-        writeln!(o, "  {:<11} {:<4} {:?}", t.name, t.dtype, t.shape)?;
+    for (name, dtype, shape) in &tensors {
+        writeln!(o, "  {name:<11} {dtype:<4} {shape:?}")?;
     }
-    let find = |n: &str| tensors.iter().find(|t| t.name == n);
-    if let (
-        Some(nodes),
-        Some(mask),
-        Some(goal),
-        Some(target),
-        Some(label),
-        Some(stage),
-        Some(demo),
-    ) = (
-        find("nodes"),
-        find("node_mask"),
-        find("goal"),
-        find("target"),
-        find("label"),
-        find("stage"),
-        find("demo"),
-    ) {
-        let m = nodes.shape.get(1).copied().unwrap_or(0);
-        let s = target.values.len();
-        if s > 0 {
-            writeln!(o, "  first samples (node: x y z I)")?;
-        }
-        for i in 0..s.min(4) {
-            let g = &goal.values[i * 3..i * 3 + 3];
-            writeln!(
-                o,
-                "    #{i} demo {} stage {} target {} label {} goal ({:.3}, {:.3}, {:.3})",
-                demo.values[i],
-                stage.values[i],
-                target.values[i],
-                label.values[i],
-                g[0],
-                g[1],
-                g[2]
-            )?;
-            let row: Vec<String> = (0..m)
-                .filter(|j| mask.values[i * m + j] > 0.0)
-                .map(|j| {
-                    let v = &nodes.values[(i * m + j) * 4..(i * m + j) * 4 + 4];
-                    format!("{:.3} {:.3} {:.3} {}", v[0], v[1], v[2], v[3])
-                })
-                .collect();
-            writeln!(o, "       nodes [{}]", row.join(" | "))?;
-        }
+    let g = &graphs.graphs;
+    let float = |v: &[f32], k: usize| v.get(k).copied().map_or(0.0, f64::from);
+    let m = g.m;
+    if g.s > 0 {
+        writeln!(o, "  first samples (node: x y z I)")?;
+    }
+    for i in 0..g.s.min(4) {
+        let int = |v: &[i64]| v.get(i).copied().unwrap_or_default();
+        let byte = |v: &[u8], k: usize| v.get(k).copied().unwrap_or_default();
+        writeln!(
+            o,
+            "    #{i} demo {} stage {} target {} label {} goal ({:.3}, {:.3}, {:.3})",
+            int(&g.demo),
+            byte(&g.stage, i),
+            int(&g.target),
+            int(&g.label),
+            float(&g.goal, i * 3),
+            float(&g.goal, i * 3 + 1),
+            float(&g.goal, i * 3 + 2)
+        )?;
+        let row: Vec<String> = (0..m)
+            .filter(|j| byte(&g.node_mask, i * m + j) > 0)
+            .map(|j| {
+                let v = |f: usize| float(&g.nodes, (i * m + j) * 4 + f);
+                format!("{:.3} {:.3} {:.3} {}", v(0), v(1), v(2), v(3))
+            })
+            .collect();
+        writeln!(o, "       nodes [{}]", row.join(" | "))?;
     }
     writeln!(o, "\nscenarios: {} suites, {} cases", c.suites, c.scenarios)?;
     for s in &scenarios.suites {
