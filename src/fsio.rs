@@ -65,10 +65,9 @@ fn remove_stale_siblings(path: &Path) {
     };
     for entry in entries.flatten() {
         let file = entry.file_name().to_string_lossy().into_owned();
-        let pid = ["tmp", "old"].iter().find_map(|tag| {
-            file.strip_prefix(&format!(".{name}.{tag}-"))
-                .and_then(|p| p.parse::<u32>().ok())
-        });
+        let pid = ["tmp", "old"]
+            .iter()
+            .find_map(|tag| sibling_pid(&name, tag, &file));
         if let Some(pid) = pid
             && pid != std::process::id()
             && !Path::new(&format!("/proc/{pid}")).exists()
@@ -81,6 +80,44 @@ fn remove_stale_siblings(path: &Path) {
             };
         }
     }
+}
+
+/// The process id of a sibling `.NAME.TAG-PID` of `path` named `file`.
+fn sibling_pid(name: &str, tag: &str, file: &str) -> Option<u32> {
+    file.strip_prefix(&format!(".{name}.{tag}-"))
+        .and_then(|p| p.parse::<u32>().ok())
+}
+
+/// Puts back an output directory that a killed run had moved aside: a run
+/// replaces `dir` by two renames (`dir` to `.NAME.old-PID`, then the new
+/// one into place), and one killed between them leaves no `dir`, only its
+/// complete old contents beside it. When `dir` is missing and such a
+/// sibling of a process that is gone exists, it is renamed back, so that
+/// earlier output is never lost to [`remove_stale_siblings`]. Returns
+/// whether it restored one.
+pub fn recover_interrupted(dir: &Path) -> bool {
+    let (Some(name), Some(parent)) = (dir.file_name(), dir.parent()) else {
+        return false;
+    };
+    let parent = if parent.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        parent
+    };
+    if dir.exists() || !Path::new("/proc/self").exists() {
+        return false;
+    }
+    let name = name.to_string_lossy();
+    let Ok(entries) = fs::read_dir(parent) else {
+        return false;
+    };
+    let moved_aside = entries.flatten().find(|e| {
+        let file = e.file_name().to_string_lossy().into_owned();
+        sibling_pid(&name, "old", &file).is_some_and(|pid| {
+            pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
+        }) && e.path().is_dir()
+    });
+    moved_aside.is_some_and(|e| fs::rename(e.path(), dir).is_ok())
 }
 
 fn sibling(path: &Path, tag: &str) -> PathBuf {
@@ -134,6 +171,7 @@ pub fn write_dir_atomically(
     artifacts: &[Artifact],
     marker: &str,
 ) -> anyhow::Result<()> {
+    recover_interrupted(dir);
     if dir.exists() {
         if !dir.is_dir() {
             bail!("{} exists and is not a directory", dir.display());
@@ -176,4 +214,65 @@ pub fn write_dir_atomically(
             .with_context(|| format!("cannot move the new {} into place", dir.display()))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("packwright-fsio-{}-{name}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).expect("scratch");
+        dir
+    }
+
+    fn artifact(bytes: &str) -> Artifact {
+        Artifact {
+            name: "manifest.json",
+            bytes: bytes.as_bytes().to_vec(),
+        }
+    }
+
+    /// A run killed between its two renames left no `out`, only
+    /// `.out.old-PID`: the next run puts it back before anything else, so
+    /// the old output is never removed as debris.
+    #[test]
+    fn output_moved_aside_by_a_killed_run_is_put_back() {
+        if !Path::new("/proc/self").exists() {
+            return;
+        }
+        let dir = scratch("moved-aside");
+        let out = dir.join("out");
+        // Above Linux's largest process id: never alive.
+        let aside = dir.join(".out.old-4194400");
+        let half_new = dir.join(".out.tmp-4194400");
+        for (d, text) in [(&aside, "old"), (&half_new, "new")] {
+            fs::create_dir_all(d).expect("created");
+            fs::write(d.join("manifest.json"), text).expect("written");
+        }
+        assert!(recover_interrupted(&out));
+        assert_eq!(
+            fs::read_to_string(out.join("manifest.json"))
+                .ok()
+                .as_deref(),
+            Some("old")
+        );
+        assert!(!aside.exists());
+        assert!(!recover_interrupted(&out), "only when `out` is missing");
+
+        // The same through a write: put back, then replaced whole, and the
+        // killed run's temporary directory removed.
+        fs::rename(&out, &aside).expect("moved aside");
+        write_dir_atomically(&out, &[artifact("newer")], "manifest.json").expect("written");
+        assert_eq!(
+            fs::read_to_string(out.join("manifest.json"))
+                .ok()
+                .as_deref(),
+            Some("newer")
+        );
+        assert!(!aside.exists() && !half_new.exists(), "no debris");
+        let _ = fs::remove_dir_all(&dir);
+    }
 }

@@ -1,6 +1,7 @@
 //! Bad input at the file-system edge: sources too large (or endless) are
 //! refused quickly, and temporary siblings left by killed runs are cleaned
-//! up by the next run.
+//! up by the next run; a run killed at any point leaves the old output or
+//! the new one whole.
 
 mod common;
 use common::{packwright, scratch};
@@ -72,5 +73,293 @@ fn a_killed_runs_temporary_directories_are_removed_by_the_next_run() {
         "stale siblings removed"
     );
     assert!(live.exists(), "a live process's sibling is left alone");
+    let _ = fs::remove_dir_all(&dir);
+}
+
+fn strs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
+/// The files of a directory, name and bytes, sorted by name.
+type Files = Vec<(String, Vec<u8>)>;
+
+/// The files of a directory.
+fn contents(dir: &Path) -> Files {
+    let mut files: Files = fs::read_dir(dir)
+        .map(|entries| {
+            entries
+                .flatten()
+                .map(|e| {
+                    let bytes = fs::read(e.path()).unwrap_or_default();
+                    (e.file_name().to_string_lossy().into_owned(), bytes)
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    files.sort();
+    files
+}
+
+/// Entries of `parent` that belong to the output `name` other than itself
+/// (`.NAME.tmp-PID`, `.NAME.old-PID`).
+fn siblings(parent: &Path, name: &str) -> Vec<String> {
+    let prefix = format!(".{name}.");
+    fs::read_dir(parent)
+        .map(|entries| {
+            entries
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|f| f.starts_with(&prefix))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// When to kill a run.
+#[derive(Debug, Clone, Copy)]
+enum Kill {
+    /// This long after it starts.
+    After(Duration),
+    /// This long after its temporary output directory appears (while it
+    /// writes or renames).
+    Writing(Duration),
+}
+
+/// Runs packwright with `args` writing `out`, killed (SIGKILL) at `when`
+/// if it is still running; its process id.
+fn run_killed(args: &[&str], out: &Path, when: Kill) -> u32 {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_packwright"))
+        .current_dir(common::root())
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("packwright starts");
+    let pid = child.id();
+    match when {
+        Kill::After(delay) => std::thread::sleep(delay),
+        Kill::Writing(delay) => {
+            let name = out.file_name().map(|n| n.to_string_lossy().into_owned());
+            let tmp = out.with_file_name(format!(".{}.tmp-{pid}", name.unwrap_or_default()));
+            let started = Instant::now();
+            while !tmp.exists()
+                && started.elapsed() < Duration::from_secs(60)
+                && child.try_wait().ok().flatten().is_none()
+            {
+                std::thread::sleep(Duration::from_micros(200));
+            }
+            std::thread::sleep(delay);
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    pid
+}
+
+/// Kill points spread over a run of `span`, from a fifth of it to past its
+/// end (the writing is at the end): fixed, so every run of the test kills
+/// at the same places.
+/// Half of them from the moment its temporary output appears, 0-300 ms
+/// into the writing and renaming.
+fn kill_points(span: Duration, count: u32) -> Vec<Kill> {
+    // A small linear congruential sequence: seeded, no dependency.
+    let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+    (0..count)
+        .map(|i| {
+            x = x
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            let u = (x >> 11) as f64 / (1u64 << 53) as f64;
+            if i % 2 == 0 {
+                Kill::After(span.mul_f64(0.2 + u * 0.9))
+            } else {
+                Kill::Writing(Duration::from_secs_f64(u * 0.300))
+            }
+        })
+        .collect()
+}
+
+/// `out` after a kill: the old output intact, the new one complete
+/// (`complete` says what that means), or, killed between its two renames,
+/// no `out` and the old one whole beside it under the killed run's name.
+fn assert_old_or_new(
+    out: &Path,
+    old: &Files,
+    pid: u32,
+    complete: &dyn Fn(&Files) -> bool,
+    what: &str,
+) {
+    let name = out.file_name().map(|n| n.to_string_lossy().into_owned());
+    let name = name.unwrap_or_default();
+    if out.exists() {
+        let now = contents(out);
+        assert!(
+            now == *old || complete(&now),
+            "{what}: {} is neither the old output nor a complete new one: {:?}",
+            out.display(),
+            now.iter().map(|(n, b)| (n, b.len())).collect::<Vec<_>>()
+        );
+    } else {
+        let parent = out.parent().expect("a parent");
+        let aside = parent.join(format!(".{name}.old-{pid}"));
+        assert_eq!(
+            contents(&aside),
+            *old,
+            "{what}: {} is gone and the old output is not whole beside it",
+            out.display()
+        );
+    }
+}
+
+const BENCH: &str = "cell bench {
+  robot ur10
+  base (0, 0, 0)
+  suction 100 mm
+  pending (0.45, -0.50) to (0.85, -0.10)
+  box tray (0.00, 0.65) size (0.40, 0.30, 0.08)
+  slot g1 (-0.12, 0.58)
+  slot g2 ( 0.00, 0.58)
+  slot g3 ( 0.12, 0.58)
+  slot g4 (-0.06, 0.72)
+  slot g5 ( 0.06, 0.72)
+}
+product A cube 50 mm
+product B cube 50 mm
+product C cube 50 mm
+product D cube 50 mm
+product E box (60 mm, 40 mm, 50 mm)
+inventory stock5 for bench {
+  A (0.50, -0.20)
+  B (0.62, -0.20)
+  C (0.74, -0.20)
+  D (0.56, -0.38)
+  E (0.68, -0.38)
+}
+";
+
+/// `compile` killed at fixed points over its run (about 12,000
+/// demonstrations, 27 MB): `out` is always the old output or the new one
+/// whole, never a mix; the next run leaves no debris.
+#[test]
+fn a_killed_compile_leaves_the_old_output_or_the_new_one() {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let dir = scratch("reliability", "killed-compile");
+    let source = |seed: u32| {
+        format!(
+            "{BENCH}\ndemos many for stock5 {{\n  choose 3 of A, B, C, D, E into g1, g2, g3, g4, g5\n  \
+             jitter 20 mm\n  repeat 20\n  seed {seed}\n}}\n"
+        )
+    };
+    let (old_file, new_file) = (dir.join("old.pack"), dir.join("new.pack"));
+    fs::write(&old_file, source(1)).expect("written");
+    fs::write(&new_file, source(2)).expect("written");
+    let (old_file, new_file) = (
+        old_file.display().to_string(),
+        new_file.display().to_string(),
+    );
+    let out = dir.join("out");
+    let out_s = out.display().to_string();
+    let reference = dir.join("reference");
+    let started = Instant::now();
+    let made = packwright(&["compile", &new_file, "-o", &reference.display().to_string()]);
+    let span = started.elapsed();
+    assert_eq!(made.status.code(), Some(0));
+    let new = contents(&reference);
+    let is_new = |c: &Files| *c == new;
+    for delay in kill_points(span, 12) {
+        let made = packwright(&["compile", &old_file, "-o", &out_s]);
+        assert_eq!(made.status.code(), Some(0));
+        assert!(siblings(&dir, "out").is_empty(), "no debris after a run");
+        let old = contents(&out);
+        let pid = run_killed(&["compile", &new_file, "-o", &out_s], &out, delay);
+        assert_old_or_new(&out, &old, pid, &is_new, &format!("killed at {delay:?}"));
+        eprintln!(
+            "killed at {delay:?}: {}, left {:?}",
+            if contents(&out) == old { "old" } else { "new" },
+            siblings(&dir, "out")
+        );
+    }
+    let made = packwright(&["compile", &old_file, "-o", &out_s]);
+    assert_eq!(made.status.code(), Some(0));
+    assert!(siblings(&dir, "out").is_empty(), "no debris after a run");
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// `train` killed at fixed points over its run: the model directory is
+/// always the old model or a complete new one (every file, the JSON files
+/// whole), and the next run leaves no debris.
+#[test]
+fn a_killed_train_leaves_the_old_model_or_the_new_one() {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let dir = scratch("reliability", "killed-train");
+    let compiled = dir.join("pine").display().to_string();
+    let made = packwright(&[
+        "compile",
+        "orders/customers/pine_gifts.pack",
+        "-o",
+        &compiled,
+    ]);
+    assert_eq!(made.status.code(), Some(0));
+    let model = dir.join("model");
+    let model_s = model.display().to_string();
+    let train = |epochs: &'static str, target: &str| {
+        vec![
+            "train".to_owned(),
+            compiled.clone(),
+            "-o".to_owned(),
+            target.to_owned(),
+            "--demos".to_owned(),
+            "pine_seen".to_owned(),
+            "--epochs".to_owned(),
+            epochs.to_owned(),
+            "--dagger-rounds".to_owned(),
+            "1".to_owned(),
+            "--quiet".to_owned(),
+        ]
+    };
+    let complete = |c: &Files| {
+        let names: Vec<&str> = c.iter().map(|(n, _)| n.as_str()).collect();
+        names
+            == [
+                "config.json",
+                "dynamics.safetensors",
+                "metrics.json",
+                "reasoner.safetensors",
+                "subgoal.safetensors",
+            ]
+            && c.iter()
+                .filter(|(n, _)| n.ends_with(".json"))
+                .all(|(_, b)| serde_json::from_slice::<serde_json::Value>(b).is_ok())
+    };
+    let reference = dir.join("reference").display().to_string();
+    let started = Instant::now();
+    let long = train("20", &reference);
+    let made = packwright(&strs(&long));
+    let span = started.elapsed();
+    assert_eq!(made.status.code(), Some(0));
+    let long = train("20", &model_s);
+    let short = train("2", &model_s);
+    for delay in kill_points(span, 6) {
+        let made = packwright(&strs(&short));
+        assert_eq!(made.status.code(), Some(0));
+        assert!(siblings(&dir, "model").is_empty(), "no debris after a run");
+        let old = contents(&model);
+        assert!(complete(&old));
+        let pid = run_killed(&strs(&long), &model, delay);
+        assert_old_or_new(
+            &model,
+            &old,
+            pid,
+            &complete,
+            &format!("killed at {delay:?}"),
+        );
+    }
+    let made = packwright(&strs(&short));
+    assert_eq!(made.status.code(), Some(0));
+    assert!(siblings(&dir, "model").is_empty(), "no debris after a run");
     let _ = fs::remove_dir_all(&dir);
 }
