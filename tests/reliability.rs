@@ -211,34 +211,8 @@ fn assert_old_or_new(
     }
 }
 
-const BENCH: &str = "cell bench {
-  robot ur10
-  base (0, 0, 0)
-  suction 100 mm
-  pending (0.45, -0.50) to (0.85, -0.10)
-  box tray (0.00, 0.65) size (0.40, 0.30, 0.08)
-  slot g1 (-0.12, 0.58)
-  slot g2 ( 0.00, 0.58)
-  slot g3 ( 0.12, 0.58)
-  slot g4 (-0.06, 0.72)
-  slot g5 ( 0.06, 0.72)
-}
-product A cube 50 mm
-product B cube 50 mm
-product C cube 50 mm
-product D cube 50 mm
-product E box (60 mm, 40 mm, 50 mm)
-inventory stock5 for bench {
-  A (0.50, -0.20)
-  B (0.62, -0.20)
-  C (0.74, -0.20)
-  D (0.56, -0.38)
-  E (0.68, -0.38)
-}
-";
-
 /// `compile` killed at fixed points over its run (about 12,000
-/// demonstrations, 27 MB): `out` is always the old output or the new one
+/// demonstrations of the line2 cell): `out` is always the old output or the new one
 /// whole, never a mix; the next run leaves no debris.
 #[test]
 fn a_killed_compile_leaves_the_old_output_or_the_new_one() {
@@ -246,9 +220,15 @@ fn a_killed_compile_leaves_the_old_output_or_the_new_one() {
         return;
     }
     let dir = scratch("reliability", "killed-compile");
+    fs::copy(
+        common::root().join("orders/cells/line2.pack"),
+        dir.join("line2.pack"),
+    )
+    .expect("copied");
     let source = |seed: u32| {
         format!(
-            "{BENCH}\ndemos many for stock5 {{\n  choose 3 of A, B, C, D, E into g1, g2, g3, g4, g5\n  \
+            "use \"line2.pack\"\ndemos many for pantry5 {{\n  \
+             choose 3 of jam, tea, honey, soap, candle into k1, k2, k3, k4, k5\n  \
              jitter 20 mm\n  repeat 20\n  seed {seed}\n}}\n"
         )
     };
