@@ -86,7 +86,7 @@ pub struct CompiledDir {
 impl CompiledDir {
     /// Reads and checks the JSON artifacts in `dir` (see the type's
     /// invariants); the first problem found is the error. Each file's
-    /// schema and version are checked before the rest of it is parsed, so
+    /// schema and version are reported before anything else about it, so
     /// a directory written by another version says so.
     pub fn read(dir: &Path) -> Result<CompiledDir> {
         let manifest = read_artifact(&dir.join(file::MANIFEST), schema::MANIFEST)?;
@@ -174,12 +174,41 @@ struct Header {
     version: u32,
 }
 
-/// The artifact at `path` of schema `expected`: its header checked first.
-fn read_artifact<T: DeserializeOwned>(path: &Path, expected: &str) -> Result<T> {
+/// A JSON artifact's own schema string and version.
+trait Versioned {
+    fn header(&self) -> (&str, u32);
+}
+
+macro_rules! versioned {
+    ($($t:ty),*) => {$(
+        impl Versioned for $t {
+            fn header(&self) -> (&str, u32) {
+                (&self.schema, self.version)
+            }
+        }
+    )*};
+}
+
+versioned!(Manifest, LabelsFile, WorldFile, ScenariosFile);
+
+/// The artifact at `path` of schema `expected`, parsed once. Its header
+/// is checked first: a file of another schema or version says so even
+/// when the rest of it does not parse (then the header alone is parsed
+/// again, to tell).
+fn read_artifact<T: DeserializeOwned + Versioned>(path: &Path, expected: &str) -> Result<T> {
     let bytes = read_bytes(path)?;
-    let header: Header = parse(path, &bytes)?;
-    check_schema(path, &header.schema, header.version, expected)?;
-    parse(path, &bytes)
+    match parse::<T>(path, &bytes) {
+        Ok(artifact) => {
+            let (found, version) = artifact.header();
+            check_schema(path, found, version, expected)?;
+            Ok(artifact)
+        }
+        Err(malformed) => {
+            let header: Header = parse(path, &bytes)?;
+            check_schema(path, &header.schema, header.version, expected)?;
+            Err(malformed)
+        }
+    }
 }
 
 fn read_bytes(path: &Path) -> Result<Vec<u8>> {
