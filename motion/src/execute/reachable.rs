@@ -8,14 +8,13 @@
 //! standing in the cell, and the carrying motions (lift to approach to
 //! above the slot: a swing or a search); `execute` reports those.
 
-use super::station::{Load, MAX_RAISES, RAISE_STEP, home, home_tip, solutions};
+use super::station::{Load, MAX_RAISES, RAISE_STEP, READY, home_on, home_tip, solutions};
 use crate::collision::{Checker, Held};
 use crate::expert::{self, SubGoal};
 use nalgebra::{Point3, Vector3};
 use packwright_interface::outcome::Stage;
 use packwright_interface::scene::CellScene;
 use packwright_kinematics::{Arm, Joints};
-use std::f64::consts::FRAC_PI_2;
 
 /// The most any joint may turn on a straight descent or lift between two
 /// solutions of the same arm shape (rad); solutions further apart belong
@@ -45,13 +44,13 @@ pub struct Reachability {
 
 impl Reachability {
     pub fn new(arm: &Arm, cell: &CellScene) -> Reachability {
-        let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
-        let start = home(arm, cell);
+        let checker = Checker::new(arm, cell);
+        let start = home_on(&checker, cell);
         Reachability {
-            checker: Checker::new(arm, cell),
+            checker,
             cell: cell.clone(),
             start,
-            near: start.unwrap_or(ready),
+            near: start.unwrap_or(READY),
         }
     }
 

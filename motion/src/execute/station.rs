@@ -496,20 +496,27 @@ pub fn home_tip(cell: &CellScene) -> [f64; 3] {
 /// elbow below it) sends the first descent through the arm's stretched
 /// pose, folding the forearm into the cup.
 pub fn home(arm: &Arm, cell: &CellScene) -> Option<Joints> {
-    let checker = Checker::new(arm, cell);
+    home_on(&Checker::new(arm, cell), cell)
+}
+
+/// [`home`] with the cell's checker already built.
+pub(crate) fn home_on(checker: &Checker, cell: &CellScene) -> Option<Joints> {
     let top = home_tip(cell);
     let low = Point3::new(top[0], top[1], START_CHECK_HEIGHT);
-    let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
-    let free: Vec<Joints> = solutions(&checker, Point3::from(top), 0.0, &ready)
+    let free: Vec<Joints> = solutions(checker, Point3::from(top), 0.0, &READY)
         .into_iter()
         .filter(|q| checker.check(q, None, None).is_none())
         .collect();
     let descends = |q: &&Joints| {
-        reach(&checker, low, 0.0, q, Load::FREE)
+        reach(checker, low, 0.0, q, Load::FREE)
             .is_some_and(|down| checker.check_motion(q, &down, None, None).is_none())
     };
     free.iter().find(descends).or(free.first()).copied()
 }
+
+/// The usual UR "ready" pose: where the start pose's inverse kinematics
+/// looks first.
+pub(crate) const READY: Joints = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
 
 /// How low over the table [`home`] checks that the arm can go straight
 /// down from its start (a hover over a small product).
