@@ -157,6 +157,10 @@ pub struct CellRecord {
     pub base: [f64; 3],
     pub suction: f64,
     pub lift: f64,
+    /// The arm's speed, a share of its full speed (absent in older
+    /// artifacts: full speed).
+    #[serde(default = "full_speed", skip_serializing_if = "at_full_speed")]
+    pub speed: f64,
     pub pending: RectRecord,
     pub boxes: Vec<BoxRecord>,
     pub slots: Vec<SlotRecord>,
@@ -257,4 +261,13 @@ pub mod tensor {
     pub const ALL: [&str; 8] = [
         NODES, NODE_MASK, GOAL, TARGET, LABEL, STAGE, DEMO, EDGE_INDEX,
     ];
+}
+
+/// The speed of a cell that declares none.
+pub fn full_speed() -> f64 {
+    1.0
+}
+
+fn at_full_speed(speed: &f64) -> bool {
+    *speed == 1.0
 }

@@ -227,6 +227,7 @@ pub fn cell_record(c: &Cell) -> CellRecord {
         base: r6n(c.base),
         suction: r6(c.suction),
         lift: r6(c.lift),
+        speed: r6(c.speed),
         pending: RectRecord {
             min: r6n(c.pending.min),
             max: r6n(c.pending.max),

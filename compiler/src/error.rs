@@ -62,6 +62,14 @@ pub enum Error {
     SlotBeforeBox { at: Loc, slot: String },
     #[error("{what}")]
     BadGeometry { at: Loc, what: String, fix: String },
+    #[error(
+        "the arm's speed must be between {min_percent} % and 100 % of its full speed, not {percent} %"
+    )]
+    SpeedOutOfRange {
+        at: Loc,
+        percent: f64,
+        min_percent: f64,
+    },
     #[error("slot `{slot}` is outside box `{box_name}`")]
     SlotOutsideBox {
         at: Loc,
@@ -220,6 +228,7 @@ impl Error {
             Error::StatementTwice { .. } => "E023",
             Error::SlotBeforeBox { .. } => "E024",
             Error::BadGeometry { .. } => "E025",
+            Error::SpeedOutOfRange { .. } => "E026",
             Error::SlotOutsideBox { .. } => "E030",
             Error::SlotsOverlap { .. } => "E031",
             Error::SlotTaken { .. } => "E032",
@@ -259,6 +268,7 @@ impl Error {
             | Error::StatementTwice { at, .. }
             | Error::SlotBeforeBox { at, .. }
             | Error::BadGeometry { at, .. }
+            | Error::SpeedOutOfRange { at, .. }
             | Error::SlotOutsideBox { at, .. }
             | Error::SlotsOverlap { at, .. }
             | Error::SlotTaken { at, .. }
@@ -297,6 +307,7 @@ impl Error {
             Error::StatementTwice { .. } => "given again here".into(),
             Error::SlotBeforeBox { .. } => "no box declared above this slot".into(),
             Error::BadGeometry { .. } => "here".into(),
+            Error::SpeedOutOfRange { .. } => "out of range".into(),
             Error::SlotOutsideBox { by_mm, .. } => format!("{by_mm:.0} mm outside the box"),
             Error::SlotsOverlap { .. } => "too close to the other slot".into(),
             Error::SlotTaken { .. } => "slot already taken".into(),
@@ -366,6 +377,7 @@ impl Error {
             Error::StatementTwice { .. } => "keep only one of them".into(),
             Error::SlotBeforeBox { .. } => "declare the `box` before its slots: a slot belongs to the box above it".into(),
             Error::BadGeometry { fix, .. } => fix.clone(),
+            Error::SpeedOutOfRange { min_percent, .. } => format!("write a share of the arm's full speed from `speed {min_percent} %` to `speed 100 %` (the default, the robot's own limits), or as a fraction (`speed 0.5`); the motions keep their paths and take 1/speed as long"),
             Error::SlotOutsideBox { .. } => "move the slot inside the box footprint (box centre ± width/2, ± depth/2)".into(),
             Error::SlotsOverlap { .. } => "slots must be at least 10 mm apart; move or remove one".into(),
             Error::SlotTaken { .. } => "give each product its own slot".into(),

@@ -16,6 +16,8 @@ pub const DEFAULT_LIFT: f64 = 0.150;
 pub const SUCTION_RANGE: (f64, f64) = (0.020, 0.300);
 /// The lift heights a cell may declare (m).
 pub const LIFT_RANGE: (f64, f64) = (0.020, 0.500);
+/// The speeds a cell may declare, as shares of the arm's full speed.
+pub const SPEED_RANGE: (f64, f64) = (0.01, 1.0);
 /// UR10 reach, measured horizontally from the base axis.
 pub const UR10_REACH_MIN: f64 = 0.20;
 pub const UR10_REACH_MAX: f64 = 1.30;
@@ -90,6 +92,11 @@ pub struct Cell {
     pub suction: f64,
     pub pending: Rect,
     pub lift: f64,
+    /// The arm's speed as a share of its full speed (1: the robot's own
+    /// limits): every motion keeps its path and takes `1 / speed` as long
+    /// (velocity limits times `speed`, accelerations times its square,
+    /// jerks times its cube).
+    pub speed: f64,
     pub boxes: Vec<BoxDef>,
     pub slots: Vec<Slot>,
 }

@@ -284,6 +284,7 @@ impl Resolver<'_> {
         let mut suction = Once::new("suction");
         let mut pending = Once::new("pending");
         let mut lift = Once::new("lift");
+        let mut speed = Once::new("speed");
         let mut boxes: Vec<BoxDef> = Vec::new();
         let mut slots: Vec<Slot> = Vec::new();
         let mut ok = true;
@@ -338,6 +339,18 @@ impl Resolver<'_> {
                         "a lower lift drags the product over the table, a higher one carries it out of the arm's reach",
                     );
                     lift.set(l.metres, sl, &mut self.errors);
+                }
+                ast::CellStmt::Speed(s) => {
+                    let (lo, hi) = SPEED_RANGE;
+                    if !(lo..=hi).contains(&s.value) {
+                        self.errors.push(Error::SpeedOutOfRange {
+                            at: Loc::new(f, s.span),
+                            percent: s.value * 100.0,
+                            min_percent: lo * 100.0,
+                        });
+                        ok = false;
+                    }
+                    speed.set(s.value, sl, &mut self.errors);
                 }
                 ast::CellStmt::Pending(a, b) => {
                     let (a, b) = (self.table_point(a, f), self.table_point(b, f));
@@ -428,6 +441,7 @@ impl Resolver<'_> {
             e,
         );
         let lift = lift.get().unwrap_or(DEFAULT_LIFT);
+        let speed = speed.get().unwrap_or(1.0);
         if boxes.is_empty() {
             e.push(Error::MissingStatement {
                 at: block,
@@ -459,6 +473,7 @@ impl Resolver<'_> {
             suction,
             pending,
             lift,
+            speed,
             boxes,
             slots,
         });

@@ -130,6 +130,18 @@ pub struct Fraction {
     pub span: Span,
 }
 
+/// A share, as a percentage (`50 %`) or a plain number (`0.5`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Share {
+    /// As a fraction (`50 %` is 0.5).
+    pub value: f64,
+    /// The number as written.
+    pub number: String,
+    /// Written with `%`.
+    pub percent: bool,
+    pub span: Span,
+}
+
 /// `(x, y)` on the table or `(x, y, z)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Point {
@@ -179,9 +191,18 @@ pub enum CellStmt {
     Base(Point),
     Suction(Length),
     Pending(Point, Point),
-    Box { name: Name, at: Point, size: Point },
-    Slot { name: Name, at: Point },
+    Box {
+        name: Name,
+        at: Point,
+        size: Point,
+    },
+    Slot {
+        name: Name,
+        at: Point,
+    },
     Lift(Length),
+    /// The arm's speed, a share of its full speed.
+    Speed(Share),
 }
 
 #[derive(Debug, Clone, PartialEq)]

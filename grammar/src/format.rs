@@ -320,6 +320,8 @@ fn cell_stmt(s: &CellStmt) -> String {
         }
         CellStmt::Slot { name, at } => format!("slot {} {}", name.text, point(at)),
         CellStmt::Lift(l) => format!("lift {}", length(l)),
+        CellStmt::Speed(s) if s.percent => format!("speed {} %", s.number),
+        CellStmt::Speed(s) => format!("speed {}", s.number),
     }
 }
 

@@ -105,6 +105,7 @@ fn describe(rule: Rule) -> Option<&'static str> {
         Rule::kw_size => "`size`",
         Rule::kw_slot => "`slot`",
         Rule::kw_lift => "`lift`",
+        Rule::kw_speed => "`speed`",
         Rule::kw_cube => "`cube`",
         Rule::kw_mass => "`mass`",
         Rule::kw_customer => "`customer`",
@@ -354,6 +355,7 @@ impl Builder {
                 Rule::base_stmt => CellStmt::Base(self.point(k.remove(1))),
                 Rule::suction_stmt => CellStmt::Suction(self.length(k.remove(1))),
                 Rule::lift_stmt => CellStmt::Lift(self.length(k.remove(1))),
+                Rule::speed_stmt => CellStmt::Speed(self.share(k.remove(1))),
                 Rule::pending_stmt => {
                     let to = self.point(k.remove(3));
                     let from = self.point(k.remove(1));
@@ -767,6 +769,29 @@ impl Builder {
                 });
                 Count { value: 0, span: s }
             }
+        }
+    }
+
+    /// A share: a number with `%`, or a plain fraction.
+    fn share(&mut self, p: P) -> Share {
+        let (number, value, unit, s) = self.quantity(p);
+        let percent = match unit {
+            None => false,
+            Some((u, _)) if u == "%" => true,
+            Some((u, us)) => {
+                self.errors.push(SyntaxError::UnknownUnit {
+                    span: us,
+                    unit: u,
+                    allowed: "`%`, or no unit for a fraction (`speed 0.5`)",
+                });
+                false
+            }
+        };
+        Share {
+            value: if percent { value / 100.0 } else { value },
+            number,
+            percent,
+            span: s,
         }
     }
 

@@ -32,6 +32,9 @@ pub struct CellScene {
     pub suction: f64,
     /// How high a held product is carried above where it stood.
     pub lift: f64,
+    /// The arm's speed, a share of its full speed (the arm's limits are
+    /// scaled by it where the episode is built).
+    pub speed: f64,
     /// The pending area's corners (min, max).
     pub pending: ([f64; 2], [f64; 2]),
     pub boxes: Vec<BoxSpec>,

@@ -89,4 +89,20 @@ impl Arm {
     pub fn within_limits(&self, q: &Joints) -> bool {
         packwright_interface::joints::within(&self.limits, q)
     }
+
+    /// The arm slowed to `speed` (a share of its full speed, in (0, 1]; as
+    /// the teach pendant's speed slider does): every motion keeps its path
+    /// and takes `1 / speed` as long, with velocity limits times `speed`,
+    /// acceleration limits times its square and jerk limits times its
+    /// cube. Other values leave the arm as it is.
+    pub fn at_speed(mut self, speed: f64) -> Arm {
+        if speed > 0.0 && speed < 1.0 {
+            for l in &mut self.limits {
+                l.velocity *= speed;
+                l.acceleration *= speed * speed;
+                l.jerk *= speed * speed * speed;
+            }
+        }
+        self
+    }
 }

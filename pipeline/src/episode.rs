@@ -52,6 +52,7 @@ pub fn scene_of(cell: &CellRecord) -> CellScene {
         base: cell.base,
         suction: cell.suction,
         lift: cell.lift,
+        speed: cell.speed,
         pending: (cell.pending.min, cell.pending.max),
         boxes: cell
             .boxes
@@ -145,7 +146,7 @@ pub fn episode(m: &Model, setup: &Setup) -> Result<Episode> {
         })
         .collect();
     Ok(Episode {
-        arm: arm_of(&cell.robot)?,
+        arm: arm_of(&cell.robot)?.at_speed(cell.speed),
         task,
         placements,
     })
@@ -263,7 +264,7 @@ pub fn demonstration_episode(world: &WorldFile, demo: &DemonstrationRecord) -> R
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    let arm = arm_of(&cell.robot)?;
+    let arm = arm_of(&cell.robot)?.at_speed(cell.speed);
     Ok(Episode {
         arm,
         task: OrderTask {

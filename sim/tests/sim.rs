@@ -26,6 +26,7 @@ fn cell() -> CellScene {
         base: [0.0, 0.0, 0.0],
         suction: SUCTION,
         lift: 0.15,
+        speed: 1.0,
         pending: ([0.45, -0.5], [0.85, -0.1]),
         boxes: vec![BoxSpec {
             name: "tray".into(),

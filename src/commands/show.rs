@@ -89,13 +89,18 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
         };
         writeln!(
             o,
-            "  {}: robot {robot}, base {}, suction {} m, lift {} m, pending {} to {}",
+            "  {}: robot {robot}, base {}, suction {} m, lift {} m, pending {} to {}{}",
             cell.name,
             p3(cell.base),
             cell.suction,
             cell.lift,
             p2(cell.pending.min),
-            p2(cell.pending.max)
+            p2(cell.pending.max),
+            if cell.speed < 1.0 {
+                format!(", speed {} %", (cell.speed * 1e4).round() / 1e2)
+            } else {
+                String::new()
+            }
         )?;
         writeln!(
             o,

@@ -15,6 +15,7 @@ pub fn bench_cell() -> CellScene {
         base: [0.0, 0.0, 0.0],
         suction: 0.1,
         lift: 0.15,
+        speed: 1.0,
         pending: ([0.45, -0.5], [0.85, -0.1]),
         boxes: vec![BoxSpec {
             name: "tray".into(),

@@ -67,6 +67,15 @@ impl Check {
         }
     }
 
+    pub(super) fn share_in(&self, at: &Field, v: f64, (min, max): (f64, f64)) -> Result<()> {
+        self.finite(at, v)?;
+        if (min..=max).contains(&v) {
+            Ok(())
+        } else {
+            Err(self.fail(at, P::ShareOutOfRange { value: v, min, max }))
+        }
+    }
+
     pub(super) fn count(&self, at: &Field, found: usize, expected: usize) -> Result<()> {
         if found == expected {
             Ok(())
