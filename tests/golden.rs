@@ -372,16 +372,17 @@ fn the_default_model_packs_the_example_orders() {
 }
 
 /// One line per product of an `execute --json` report: outcome, simulated
-/// execution time and final error, rounded as asked.
+/// execution time and its lower bound, and final error, rounded as asked.
 fn plan_rows(report: &serde_json::Value, time_digits: usize, error_digits: usize) -> String {
     let mut text = String::new();
     for p in report["products"].as_array().expect("products") {
         text.push_str(&format!(
-            "  {} -> {}: {}, execution {:.t$} s, error {:.e$} mm\n",
+            "  {} -> {}: {}, execution {:.t$} s (bound {:.t$} s), error {:.e$} mm\n",
             p["product"].as_str().unwrap_or("?"),
             p["slot"].as_str().unwrap_or("?"),
             p["outcome"].as_str().unwrap_or("?"),
             p["execution_s"].as_f64().unwrap_or(f64::NAN),
+            p["bound_s"].as_f64().unwrap_or(f64::NAN),
             p["error_m"].as_f64().unwrap_or(f64::NAN) * 1000.0,
             t = time_digits,
             e = error_digits,

@@ -381,6 +381,12 @@ pub struct ProductReport {
     pub planning_s: f64,
     /// Simulated (or real) seconds of motion for this product.
     pub execution_s: f64,
+    /// A lower bound on `execution_s` for any planner: between the same
+    /// stops (where the product's motion starts, the contact with its top
+    /// face, the release, and where its motion ends) each joint's own
+    /// time-optimal jerk-limited move, the slowest joint's, plus the
+    /// suction's settling times. 0 when the arm did not move.
+    pub bound_s: f64,
     /// Distance of the product's centre from its slot goal at the end.
     pub error_m: Option<f64>,
     #[serde(flatten)]

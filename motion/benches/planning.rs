@@ -1,4 +1,5 @@
-//! Collision checks and RRT-Connect on the UR10 in a bench cell.
+//! Collision checks, RRT-Connect and blending a product's motion on the
+//! UR10 in a bench cell.
 //!
 //! `cargo bench -p packwright-runtime --bench planning`
 
@@ -9,8 +10,9 @@ use common::bench_cell;
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Point3;
 use packwright_kinematics::Arm;
+use packwright_motion::blend::blend;
 use packwright_motion::collision::{Checker, ProductBody};
-use packwright_motion::execute::{Load, reach};
+use packwright_motion::execute::{Load, checked_blend, reach};
 use packwright_motion::rrt::{self, Query, RrtConfig};
 use std::f64::consts::FRAC_PI_2;
 use std::hint::black_box;
@@ -81,6 +83,37 @@ fn bench(c: &mut Criterion) {
         b.iter(|| rrt::plan(&blocked_query, a, b2, &RrtConfig::default()))
     });
     group.finish();
+
+    // One product's seven sub-goals (hover, top face, lift, approach,
+    // above the slot, release, back up), stopping only at the contact and
+    // the release: the legs, the overlaps, the samples, and with their
+    // collision checks.
+    let product = [
+        at(0.62, -0.2, 0.15),
+        at(0.62, -0.2, 0.05),
+        at(0.62, -0.2, 0.15),
+        at(0.35, 0.25, 0.25),
+        at(0.0, 0.6, 0.15),
+        at(0.0, 0.6, 0.08),
+        at(0.0, 0.6, 0.15),
+    ];
+    let stops = [false, true, false, false, false, true, false];
+    let start = at(0.5, -0.2, 0.3);
+    c.bench_function("blend a product's 7 sub-goals", |b| {
+        b.iter(|| blend(arm.limits, black_box(start), &product, &stops))
+    });
+    c.bench_function("blend a product's 7 sub-goals and check them", |b| {
+        b.iter(|| {
+            checked_blend(
+                &arm,
+                &checker,
+                black_box(start),
+                &product,
+                &stops,
+                Load::FREE,
+            )
+        })
+    });
 }
 
 criterion_group!(benches, bench);

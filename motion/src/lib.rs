@@ -3,6 +3,8 @@
 //! - [`collision`]: the planner's collision checker, on the cell's one
 //!   collision description (`packwright_kinematics::body`);
 //! - [`smoothing`]: jerk-limited Ruckig smoothing at the control rate;
+//! - [`blend`]: passing through waypoints without stopping, within the
+//!   same limits;
 //! - [`rrt`]: the RRT-Connect planner;
 //! - [`expert`]: the scripted demonstrator's sub-goal geometry;
 //! - [`execute`]: the execution loops (expert, RRT-Connect, learned) over
@@ -11,6 +13,7 @@
 //!
 //! Nothing here depends on a simulator or a learning framework.
 
+pub mod blend;
 pub mod collision;
 pub mod error;
 pub mod execute;

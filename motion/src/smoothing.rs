@@ -118,28 +118,10 @@ impl Smoother {
     /// positive, a position range is empty or NaN, or `start` is not finite
     /// or outside the position limits.
     pub fn new(limits: [Limits; DOF], start: Joints) -> Result<Smoother, SmoothingError> {
-        check_limits(&limits)?;
-        check_position(&limits, &start, Position::Start)?;
-
-        let mut input = InputParameter::<DOF>::new(None);
-        input.synchronization = Synchronization::Phase;
-        input.control_interface = ControlInterface::Position;
-        input.duration_discretization = DurationDiscretization::Continuous;
-        let mut max_position = [0.0; DOF];
-        let mut min_position = [0.0; DOF];
-        for (j, l) in limits.iter().enumerate() {
-            input.max_velocity[j] = l.velocity;
-            input.max_acceleration[j] = l.acceleration;
-            input.max_jerk[j] = l.jerk;
-            max_position[j] = l.upper + POSITION_TOLERANCE;
-            min_position[j] = l.lower - POSITION_TOLERANCE;
-        }
-        input.max_position = Some(DataArrayOrVec::Stack(max_position));
-        input.min_position = Some(DataArrayOrVec::Stack(min_position));
-
+        let (otg, input) = ruckig_input(&limits, start)?;
         let mut smoother = Smoother {
             limits,
-            otg: Ruckig::new(None, CONTROL_PERIOD),
+            otg,
             input,
             output: OutputParameter::new(None),
         };
@@ -359,6 +341,58 @@ pub fn duration_of(
     Ok(total)
 }
 
+/// The least time (seconds) any jerk-limited motion within `limits` needs
+/// from rest at `from` to rest at `to`: each joint alone, time-optimal
+/// (Ruckig), the slowest joint's. No synchronisation, no path: a lower
+/// bound for every planner between the same two stops.
+pub fn lower_bound(limits: [Limits; DOF], from: Joints, to: Joints) -> Result<f64, SmoothingError> {
+    let (mut otg, mut input) = ruckig_input(&limits, from)?;
+    check_position(&limits, &to, Position::Target)?;
+    input.target_position.copy_from_slice(&to);
+    let mut trajectory = Trajectory::new(None);
+    let fail = |reason: String| SmoothingError::NoTrajectory { from, to, reason };
+    match otg.calculate(&input, &mut trajectory) {
+        Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => {}
+        Ok(other) => return Err(fail(format!("Ruckig returned {other:?}"))),
+        Err(e) => return Err(fail(e.to_string())),
+    }
+    Ok(trajectory
+        .get_independent_min_durations()
+        .iter()
+        .copied()
+        .fold(0.0, f64::max))
+}
+
+/// A Ruckig generator at the control rate and its input for `limits`
+/// (phase-synchronised, position interface, continuous durations, the
+/// position range with [`POSITION_TOLERANCE`]), at rest at `start`: what
+/// [`Smoother`] and [`blend`](crate::blend::blend) plan with.
+pub(crate) fn ruckig_input(
+    limits: &[Limits; DOF],
+    start: Joints,
+) -> Result<(Ruckig<DOF, ThrowErrorHandler>, InputParameter<DOF>), SmoothingError> {
+    check_limits(limits)?;
+    check_position(limits, &start, Position::Start)?;
+    let mut input = InputParameter::<DOF>::new(None);
+    input.synchronization = Synchronization::Phase;
+    input.control_interface = ControlInterface::Position;
+    input.duration_discretization = DurationDiscretization::Continuous;
+    let mut max_position = [0.0; DOF];
+    let mut min_position = [0.0; DOF];
+    for (j, l) in limits.iter().enumerate() {
+        input.max_velocity[j] = l.velocity;
+        input.max_acceleration[j] = l.acceleration;
+        input.max_jerk[j] = l.jerk;
+        max_position[j] = l.upper + POSITION_TOLERANCE;
+        min_position[j] = l.lower - POSITION_TOLERANCE;
+    }
+    input.max_position = Some(DataArrayOrVec::Stack(max_position));
+    input.min_position = Some(DataArrayOrVec::Stack(min_position));
+    input.current_position.copy_from_slice(&start);
+    input.target_position.copy_from_slice(&start);
+    Ok((Ruckig::new(None, CONTROL_PERIOD), input))
+}
+
 fn check_limits(limits: &[Limits; DOF]) -> Result<(), SmoothingError> {
     for (j, l) in limits.iter().enumerate() {
         for (name, value) in [
@@ -386,7 +420,11 @@ fn check_limits(limits: &[Limits; DOF]) -> Result<(), SmoothingError> {
     Ok(())
 }
 
-fn check_position(limits: &[Limits; DOF], q: &Joints, at: Position) -> Result<(), SmoothingError> {
+pub(crate) fn check_position(
+    limits: &[Limits; DOF],
+    q: &Joints,
+    at: Position,
+) -> Result<(), SmoothingError> {
     for (j, (v, l)) in q.iter().zip(limits).enumerate() {
         if !v.is_finite() {
             return Err(SmoothingError::NonFinite {

@@ -120,6 +120,36 @@ fn the_expert_packs_an_order() {
 }
 
 #[test]
+fn execution_is_above_its_lower_bound_and_a_slower_arm_takes_longer() {
+    let assign = [("C", "g1"), ("A", "g3")];
+    let full = run(&assign, &[], &[], Planner::Expert);
+    let (arm, task, _) = episode(&assign, &[], &[]);
+    let slow_arm = arm.at_speed(0.5);
+    let start = execute::home(&slow_arm, &task.cell).expect("a start pose");
+    let placements: Vec<Placement> = products()
+        .into_iter()
+        .map(|(s, at)| Placement {
+            centre: [at[0], at[1], s.size[2] / 2.0],
+            product: s,
+        })
+        .collect();
+    let mut sim = Simulator::new(slow_arm.clone(), &task.cell, &placements, start).expect("sim");
+    let slow = execute::run(&mut sim, &slow_arm, &task, &Planner::Expert);
+    assert_packed(&full);
+    assert_packed(&slow);
+    for (f, s) in full.products.iter().zip(&slow.products) {
+        // No planner beats the bound; settling (0.6 s) does not scale.
+        assert!(f.bound_s > 1.0 && f.execution_s >= f.bound_s, "{f:?}");
+        assert!(s.execution_s >= s.bound_s, "{s:?}");
+        let (fm, sm) = (f.execution_s - 0.6, s.execution_s - 0.6);
+        assert!(
+            sm > 1.8 * fm && sm < 2.2 * fm,
+            "half speed: {sm:.2} s of motion against {fm:.2} s"
+        );
+    }
+}
+
+#[test]
 fn rrt_connect_packs_an_order() {
     let report = run(
         &[("B", "g4"), ("D", "g2")],

@@ -27,6 +27,9 @@ pub struct Run {
     pub timing: Timing,
     /// Simulated seconds per product the robot packed.
     pub execution_s: Vec<f64>,
+    /// The lower bound of each of those
+    /// ([`ProductReport::bound_s`](packwright_interface::outcome::ProductReport)).
+    pub bound_s: Vec<f64>,
 }
 
 impl Run {
@@ -43,6 +46,12 @@ impl Run {
                 .iter()
                 .filter(|p| p.outcome == Outcome::Packed)
                 .map(|p| p.execution_s)
+                .collect(),
+            bound_s: r
+                .products
+                .iter()
+                .filter(|p| p.outcome == Outcome::Packed)
+                .map(|p| p.bound_s)
                 .collect(),
         }
     }
@@ -163,6 +172,14 @@ pub struct Row {
     pub network_us: Spread,
     pub failures: Vec<CaseFailure>,
     pub execution_s_per_product: Option<f64>,
+    /// The mean lower bound of those products' execution times (each
+    /// joint alone, jerk-limited, between the same stops, plus settling).
+    pub bound_s_per_product: Option<f64>,
+    /// `execution_s_per_product / bound_s_per_product`.
+    pub time_ratio: Option<f64>,
+    /// Products packed per hour of execution (3600 /
+    /// `execution_s_per_product`; planning not included).
+    pub products_per_hour: Option<f64>,
 }
 
 impl Row {
@@ -201,6 +218,16 @@ impl Row {
                 .flat_map(|(_, r)| f(&r.timing).iter().copied())
                 .collect()
         };
+        let per_product = |f: fn(&Run) -> &Vec<f64>| {
+            mean(
+                &runs
+                    .iter()
+                    .flat_map(|(_, r)| f(r).iter().copied())
+                    .collect::<Vec<_>>(),
+            )
+        };
+        let execution = per_product(|r| &r.execution_s);
+        let bound = per_product(|r| &r.bound_s);
         let mut kinds = BTreeMap::new();
         for kind in runs.iter().flat_map(|(_, r)| r.fallbacks.iter()) {
             *kinds.entry(kind.to_string()).or_default() += 1;
@@ -232,12 +259,13 @@ impl Row {
                     })
                 })
                 .collect(),
-            execution_s_per_product: mean(
-                &runs
-                    .iter()
-                    .flat_map(|(_, r)| r.execution_s.iter().copied())
-                    .collect::<Vec<_>>(),
-            ),
+            execution_s_per_product: execution,
+            bound_s_per_product: bound,
+            time_ratio: execution
+                .zip(bound)
+                .filter(|(_, b)| *b > 0.0)
+                .map(|(e, b)| e / b),
+            products_per_hour: execution.filter(|e| *e > 0.0).map(|e| 3600.0 / e),
         }
     }
 }
@@ -258,11 +286,11 @@ fn micros(s: &Spread) -> String {
 /// The Markdown table of `rows`.
 pub fn markdown(rows: &[Row]) -> String {
     let mut out = String::from(
-        "| suite | cell | planner | n | reasoner SR | SR [95% CI] | SR no fallback | fallbacks/package | decision us (median / p99) | sub-goal us (median / p99) | sub-goal + action us (median / p99) | execution s/product |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| suite | cell | planner | n | reasoner SR | SR [95% CI] | SR no fallback | fallbacks/package | decision us (median / p99) | sub-goal us (median / p99) | sub-goal + action us (median / p99) | execution s/product | bound s/product | ratio | products/hour |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         out.push_str(&format!(
-            "| {} | {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r.suite,
             r.cell,
             if r.cell_taught == Some(false) {
@@ -282,6 +310,11 @@ pub fn markdown(rows: &[Row]) -> String {
             micros(&r.network_us),
             r.execution_s_per_product
                 .map_or("-".into(), |v| format!("{v:.2}")),
+            r.bound_s_per_product
+                .map_or("-".into(), |v| format!("{v:.2}")),
+            r.time_ratio.map_or("-".into(), |v| format!("{v:.2}")),
+            r.products_per_hour
+                .map_or("-".into(), |v| format!("{v:.0}")),
         ));
     }
     out

@@ -64,31 +64,34 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
 fn print_report(name: &str, report: &Report) {
     outln!("{name}: planner {}", report.planner);
     outln!(
-        "{:<12} {:<8} {:>11} {:>11} {:>10}  outcome",
+        "{:<12} {:<8} {:>11} {:>11} {:>9} {:>10}  outcome",
         "product",
         "slot",
         "planning",
         "execution",
+        "bound",
         "error"
     );
     for p in &report.products {
         let error = p
             .error_m
             .map_or("-".into(), |e| format!("{:.1} mm", e * 1000.0));
-        let (planning, exec) = if p.execution_s > 0.0 {
+        let (planning, exec, bound) = if p.execution_s > 0.0 {
             (
                 format!("{:.1} ms", p.planning_s * 1000.0),
                 format!("{:.2} s", p.execution_s),
+                format!("{:.2} s", p.bound_s),
             )
         } else {
-            ("-".into(), "-".into())
+            ("-".into(), "-".into(), "-".into())
         };
         outln!(
-            "{:<12} {:<8} {:>11} {:>11} {:>10}  {}",
+            "{:<12} {:<8} {:>11} {:>11} {:>9} {:>10}  {}",
             p.product,
             p.slot,
             planning,
             exec,
+            bound,
             error,
             p.outcome
         );

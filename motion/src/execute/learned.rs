@@ -8,9 +8,10 @@
 //! [`Fallback`]). A decision that breaks the order stops the arm (a
 //! [`Violation`]).
 
-use super::reasoner::{f32s, graph, in_slot};
+use super::reasoner::{f32s, graph, in_slot, lifted};
 use super::station::{
-    Connect, Load, MAX_RAISES, RAISE_STEP, SUCCESS_RADIUS, Station, Unchecked, judge,
+    Connect, Leg, Load, MAX_RAISES, RAISE_STEP, Route, SUCCESS_RADIUS, Station, Unchecked, judge,
+    leg_end,
 };
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
@@ -186,7 +187,7 @@ impl<W: World> Learned<'_, W> {
         tolerance: f64,
         load: Load,
         first_action_us: &mut Option<f64>,
-    ) -> Result<Vec<Joints>, Shortfall> {
+    ) -> Result<Route, Shortfall> {
         let s = &self.station;
         let steps = policy_steps(
             s.arm,
@@ -205,7 +206,10 @@ impl<W: World> Learned<'_, W> {
             },
         )?;
         let Some(last) = steps.last() else {
-            return Ok(Vec::new());
+            return Ok(Route {
+                waypoints: Vec::new(),
+                samples: Vec::new(),
+            });
         };
         // The base and wrist 3 may have turned past their limits: the same
         // pose a whole turn back, which the straight motion reaches the
@@ -221,11 +225,16 @@ impl<W: World> Learned<'_, W> {
             Unchecked::Collides(hit) => Shortfall::Collides { hit },
             Unchecked::Smoothing(reason) => Shortfall::Smoothing { reason },
         };
-        match checked_samples(s.arm, &s.checker, start, &[end], load) {
-            Ok(samples) => Ok(samples),
-            // Through every step instead, when they stay within the limits.
+        let route = |waypoints: Vec<Joints>| {
+            checked_samples(s.arm, &s.checker, start, &waypoints, load)
+                .map(|samples| Route { waypoints, samples })
+        };
+        match route(vec![end]) {
+            Ok(route) => Ok(route),
+            // Through every step instead (passing through them), when they
+            // stay within the limits.
             Err(straight) if steps.iter().all(|q| s.arm.within_limits(q)) => {
-                checked_samples(s.arm, &s.checker, start, &steps, load).map_err(|_| why(straight))
+                route(steps).map_err(|_| why(straight))
             }
             Err(straight) => Err(why(straight)),
         }
@@ -239,7 +248,7 @@ impl<W: World> Learned<'_, W> {
         goal: SubGoal,
         load: Load,
         ceiling: f64,
-    ) -> Result<Vec<Joints>, Failure> {
+    ) -> Result<Route, Failure> {
         let s = &self.station;
         let target = s.solve(&goal, k + 1, &start, 0.0, load, ceiling)?;
         s.route_any(
@@ -250,17 +259,29 @@ impl<W: World> Learned<'_, W> {
             0.0,
             load,
         )
-        .map(|(_, samples)| samples)
+        .map(|(_, route)| route)
     }
 
-    /// One stage with learned sub-goals and motions: the sub-goals used.
-    fn stage(&mut self, plan: &StagePlan) -> Result<Reached, Failure> {
+    /// One stage with learned sub-goals and motions, planned from where
+    /// the `pending` legs of the stage before end (else from where the arm
+    /// is) and sent after them ([`Station::send_legs`]; with `keep_tail`,
+    /// the legs after the last suction switch are returned unsent): the
+    /// sub-goals used.
+    fn stage(
+        &mut self,
+        plan: &StagePlan,
+        pending: Vec<Leg>,
+        keep_tail: bool,
+    ) -> Result<(Reached, Vec<Leg>), Failure> {
         let mut fallen = false;
         let mut goals = [[0.0; 3]; 3];
         let mut tips = [[0.0; 3]; 3];
         let base = f32s(self.station.task.cell.base);
+        // The stage is planned to its end before the arm moves, each
+        // sub-goal from where the one before leaves the arm.
+        let mut start = leg_end(&pending).unwrap_or_else(|| self.station.world.observe().joints);
+        let mut legs = pending;
         for (k, switch) in schedule(plan.stage).into_iter().enumerate() {
-            let start = self.station.world.observe().joints;
             let started = Instant::now();
             let tool = f32s(self.station.tip(&start));
             let mut goal = self
@@ -316,8 +337,8 @@ impl<W: World> Learned<'_, W> {
                 }
                 rolled
             });
-            let samples = match rolled {
-                Some(Ok(samples)) => samples,
+            let route = match rolled {
+                Some(Ok(route)) => route,
                 other => {
                     if let Some(Err(why)) = other {
                         self.fallbacks.push(Fallback {
@@ -338,10 +359,14 @@ impl<W: World> Learned<'_, W> {
             let elapsed = started.elapsed().as_secs_f64();
             self.station.timing.subgoal_us.push(elapsed * 1e6);
             self.station.clock.planning_s += elapsed;
-            self.station.send(&samples, switch)?;
-            tips[k] = self.station.tip(&self.station.world.observe().joints);
+            if let Some(end) = route.waypoints.last() {
+                start = *end;
+            }
+            tips[k] = self.station.tip(&start);
+            legs.push(Leg::new(route, switch, plan.load));
         }
-        Ok(Reached { goals, tips })
+        let tail = self.station.send_legs(legs, keep_tail)?;
+        Ok((Reached { goals, tips }, tail))
     }
 
     /// Backs off straight up to the height of `above` (the learned "above
@@ -363,8 +388,8 @@ impl<W: World> Learned<'_, W> {
             suction: Suction::Keep,
         };
         let target = s.solve(&up, 1, &start, 0.0, load, above[2])?;
-        let samples = match s.checked(1, start, &[target], load) {
-            Ok(samples) => samples,
+        let route = match s.checked(1, start, &[target], load) {
+            Ok(route) => route,
             // A straight joint motion bows sideways; from a slot near a
             // wall, go up a vertical line of via points instead.
             Err(straight) => {
@@ -383,7 +408,7 @@ impl<W: World> Learned<'_, W> {
             }
         };
         self.station.clock.planning_s += started.elapsed().as_secs_f64();
-        self.station.send(&samples, Suction::Keep)
+        self.station.send(&route.samples, Suction::Keep)
     }
 
     /// The reasoner's decision, timed.
@@ -448,17 +473,27 @@ impl<W: World> Learned<'_, W> {
         let obs = self.station.world.observe();
         self.station.sync_products(&obs);
         let (centre, _) = obs.find(name).ok_or(Failure::Disappeared)?;
-        let picked = self.stage(&StagePlan {
-            stage: Stage::Picking,
-            product: name,
-            feature: centre,
-            height: spec.size[2],
-            contact: Some(centre[2] + spec.size[2] / 2.0),
-            load: Load::ignoring(name),
-        })?;
-        // Placing: the reasoner sees the held product raised.
+        // The lift is sent with the carry, blended into it.
+        let (picked, lift) = self.stage(
+            &StagePlan {
+                stage: Stage::Picking,
+                product: name,
+                feature: centre,
+                height: spec.size[2],
+                contact: Some(centre[2] + spec.size[2] / 2.0),
+                load: Load::ignoring(name),
+            },
+            Vec::new(),
+            true,
+        )?;
+        // Placing: the reasoner sees the held product raised by the lift
+        // (about to be sent with the carry).
         let obs = self.station.world.observe();
-        let (g, which) = graph(task, &obs.products, &self.rule, Some(p));
+        let mut seen = obs.products.clone();
+        if !lift.is_empty() {
+            lifted(task, &mut seen, p);
+        }
+        let (g, which) = graph(task, &seen, &self.rule, Some(p));
         let choice = self.reason(&g);
         if let Some(n) = choice.node {
             return Err(Halt::Violation(Violation::ProductWhileHolding {
@@ -482,10 +517,11 @@ impl<W: World> Learned<'_, W> {
         // carries, so the offset stays the same in the world.
         let contact = picked.tips[1];
         let grip = [centre[0] - contact[0], centre[1] - contact[1]];
+        let raised = leg_end(&lift).unwrap_or(obs.joints);
         let flange = self
             .station
             .arm
-            .flange_pose(&self.station.base, &obs.joints)
+            .flange_pose(&self.station.base, &raised)
             .rotation;
         let held = Held::under_cup(
             name,
@@ -495,14 +531,18 @@ impl<W: World> Learned<'_, W> {
         );
         self.station.sync_products(&obs);
         let rim = task.slot_rim(s);
-        let placed = self.stage(&StagePlan {
-            stage: Stage::Placing,
-            product: name,
-            feature: [rim[0] - grip[0], rim[1] - grip[1], rim[2]],
-            height: spec.size[2],
-            contact: None,
-            load: Load::holding(&held),
-        })?;
+        let (placed, _) = self.stage(
+            &StagePlan {
+                stage: Stage::Placing,
+                product: name,
+                feature: [rim[0] - grip[0], rim[1] - grip[1], rim[2]],
+                height: spec.size[2],
+                contact: None,
+                load: Load::holding(&held),
+            },
+            lift,
+            false,
+        )?;
         self.retreat(placed.goals[1], name)?;
         Ok(())
     }

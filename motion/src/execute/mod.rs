@@ -29,7 +29,9 @@ mod station;
 pub use learned::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps, tolerance};
 pub use reachable::{Reachability, Unreached};
 pub use reasoner::{demonstrated_decisions, expected_next, graph, reasoner_trial};
-pub use station::{HOME_HEIGHT, Load, Unchecked, checked_samples, home, home_tip, reach};
+pub use station::{
+    HOME_HEIGHT, Load, Unchecked, checked_blend, checked_samples, home, home_tip, reach,
+};
 
 use packwright_interface::outcome::{PlannerKind, Report};
 use packwright_interface::record::MotionLog;

@@ -72,7 +72,7 @@ pub fn expected_next(task: &OrderTask, seen: &[Seen], rule: &SequenceRule) -> Op
 }
 
 /// `seen` with product `p` lifted by the cell's lift (in the cup).
-fn lifted(task: &OrderTask, seen: &mut [Seen], p: usize) {
+pub(crate) fn lifted(task: &OrderTask, seen: &mut [Seen], p: usize) {
     if let Some(x) = seen.iter_mut().find(|x| x.name == task.products[p].name) {
         x.centre[2] += task.cell.lift;
     }

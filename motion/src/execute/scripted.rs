@@ -4,7 +4,7 @@
 //! joints among the free ones, joined straight or by RRT-Connect; the
 //! expert's runs can be recorded as motion demonstrations.
 
-use super::station::{Connect, Load, SUCCESS_RADIUS, Station, distance, judge};
+use super::station::{Connect, Leg, Load, SUCCESS_RADIUS, Station, distance, judge, leg_end};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction};
 use nalgebra::Vector3;
@@ -112,20 +112,27 @@ impl<W: World> Scripted<'_, W> {
         }
     }
 
-    /// Joins, smooths, checks and sends one stage's motions (from where the
-    /// arm is, to each planned sub-goal, or to another solution of it when
-    /// the planned one cannot be joined; the sub-goals after such a change
-    /// are solved again from it); switches the suction.
+    /// Joins, smooths and checks one stage's motions (from where the
+    /// `pending` legs of the stage before end, else from where the arm is,
+    /// to each planned sub-goal, or to another solution of it when the
+    /// planned one cannot be joined; the sub-goals after such a change are
+    /// solved again from it), then sends them after the pending ones,
+    /// passing through the sub-goals where the suction does not switch
+    /// ([`Station::send_legs`]); switches the suction. With `keep_tail`,
+    /// the legs after the last switch are returned unsent.
     fn run_stage(
         &mut self,
         plan: Vec<Planned>,
         yaw: f64,
         load: Load,
         info: Option<StageInfo>,
-    ) -> Result<(), Failure> {
+        pending: Vec<Leg>,
+        keep_tail: bool,
+    ) -> Result<Vec<Leg>, Failure> {
+        let mut start = leg_end(&pending).unwrap_or_else(|| self.station.world.observe().joints);
         let mut replanned = false;
+        let mut legs = pending;
         for (k, planned) in plan.into_iter().enumerate() {
-            let start = self.station.world.observe().joints;
             let started = Instant::now();
             let how = match self.connect {
                 Connect::Rrt { seed } => Connect::Rrt {
@@ -146,14 +153,15 @@ impl<W: World> Scripted<'_, W> {
                 .timing
                 .subgoal_us
                 .push(planned.solve_us + elapsed * 1e6);
-            let (goal, samples) = routed?;
+            let (goal, route) = routed?;
             replanned |= goal != planned.joints;
             if let Some(info) = info {
-                self.record(info, k, &start, &goal, &samples);
+                self.record(info, k, &start, &goal, &route.samples);
             }
-            self.station.send(&samples, planned.goal.suction)?;
+            legs.push(Leg::new(route, planned.goal.suction, load));
+            start = goal;
         }
-        Ok(())
+        self.station.send_legs(legs, keep_tail)
     }
 
     /// Picks product `p` and places it in slot `s`.
@@ -175,7 +183,8 @@ impl<W: World> Scripted<'_, W> {
             label: 0,
             height: h,
         };
-        self.run_stage(plan, yaw, free, Some(pick))?;
+        // The lift is sent with the carry, blended into it.
+        let lift = self.run_stage(plan, yaw, free, Some(pick), Vec::new(), true)?;
 
         let obs = self.station.world.observe();
         let held = Held::under_cup(name, spec.size, cell.suction, Vector3::zeros());
@@ -190,14 +199,15 @@ impl<W: World> Scripted<'_, W> {
         self.station.sync_products(&obs);
         let carrying = Load::holding(&held);
         // Placing the product square in its slot: yaw 0 (it turns with the cup).
-        let plan = self.plan_stage(obs.joints, &placing, 0.0, carrying)?;
+        let from = leg_end(&lift).unwrap_or(obs.joints);
+        let plan = self.plan_stage(from, &placing, 0.0, carrying)?;
         let place = StageInfo {
             stage: Stage::Placing,
             feature: task.slot_rim(s),
             label: s as u32 + 1,
             height: h,
         };
-        self.run_stage(plan, 0.0, carrying, Some(place))?;
+        self.run_stage(plan, 0.0, carrying, Some(place), lift, false)?;
 
         // Back up from the released product, which the checker now sees
         // where it lies (its last observed place was under the cup).
@@ -208,7 +218,8 @@ impl<W: World> Scripted<'_, W> {
             suction: Suction::Keep,
         }];
         let plan = self.plan_stage(obs.joints, &up, 0.0, free)?;
-        self.run_stage(plan, 0.0, free, None)
+        self.run_stage(plan, 0.0, free, None, Vec::new(), false)
+            .map(|_| ())
     }
 }
 

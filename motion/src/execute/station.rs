@@ -5,13 +5,14 @@
 //! or RRT-Connect), smooth and check the commands, send them and switch the
 //! suction. Each returns a typed [`Failure`] naming the sub-goal.
 //!
-//! Invariant: nothing reaches the world that [`checked_samples`] did not
+//! Invariant: nothing reaches the world that [`checked_blend`] did not
 //! return.
 
+use crate::blend::{Blended, blend};
 use crate::collision::{Checker, Held, MAX_STEP, ProductBody};
 use crate::expert::{SubGoal, Suction};
 use crate::rrt::{self, Query, RrtConfig};
-use crate::smoothing::smooth_path;
+use crate::smoothing::lower_bound;
 use nalgebra::{Isometry3, Point3};
 use packwright_interface::outcome::{Failure, Hit, PlannerKind, ProductReport, Report, Timing};
 use packwright_interface::world::{Contact, Observation, World};
@@ -32,6 +33,49 @@ const RELEASE_SETTLE: usize = 250;
 /// Height of the cup tip in the start pose.
 pub const HOME_HEIGHT: f64 = 0.35;
 
+/// A checked motion towards one sub-goal: the joint waypoints it passes
+/// (the sub-goal's joints last) and the commands joining them from where
+/// it starts, blended through the waypoints and checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Route {
+    pub waypoints: Vec<Joints>,
+    pub samples: Vec<Joints>,
+}
+
+/// One leg to send: its route, the suction switched at its end, and what
+/// it carries and may touch (owned, so that a leg can wait for the next
+/// stage's: [`Station::send_legs`]).
+#[derive(Debug, Clone)]
+pub(crate) struct Leg {
+    pub route: Route,
+    pub suction: Suction,
+    pub held: Option<Held>,
+    pub ignore: Option<String>,
+}
+
+/// Where the last of `legs` leaves the arm.
+pub(crate) fn leg_end(legs: &[Leg]) -> Option<Joints> {
+    legs.last().and_then(|l| l.route.waypoints.last().copied())
+}
+
+impl Leg {
+    pub fn new(route: Route, suction: Suction, load: Load) -> Leg {
+        Leg {
+            route,
+            suction,
+            held: load.held.cloned(),
+            ignore: load.ignore.map(str::to_owned),
+        }
+    }
+
+    pub fn load(&self) -> Load<'_> {
+        Load {
+            held: self.held.as_ref(),
+            ignore: self.ignore.as_deref(),
+        }
+    }
+}
+
 /// How to join two configurations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Connect {
@@ -46,6 +90,10 @@ pub(crate) enum Connect {
 pub(crate) struct Clock {
     pub planning_s: f64,
     pub steps: usize,
+    /// The lower bound on the motion so far ([`ProductReport::bound_s`]):
+    /// up to `stop`, where the arm last had to be at rest.
+    pub bound_s: f64,
+    pub stop: Option<Joints>,
 }
 
 /// What a motion carries and may touch: the product held, and the one
@@ -189,9 +237,9 @@ impl<'a, W: World> Station<'a, W> {
         from: Joints,
         to: Joints,
         load: Load,
-    ) -> Result<Vec<Joints>, Failure> {
+    ) -> Result<Route, Failure> {
         let straight = match self.checked(k, from, &[to], load) {
-            Ok(samples) => return Ok(samples),
+            Ok(route) => return Ok(route),
             Err(why @ Failure::WouldCollide { .. }) => why,
             Err(other) => return Err(other),
         };
@@ -204,9 +252,9 @@ impl<'a, W: World> Station<'a, W> {
         swing_last[5] -= turn;
         for via in [swing_first, swing_last] {
             if self.arm.within_limits(&via)
-                && let Ok(samples) = self.checked(k, from, &[via, to], load)
+                && let Ok(route) = self.checked(k, from, &[via, to], load)
             {
-                return Ok(samples);
+                return Ok(route);
             }
         }
         match how {
@@ -243,9 +291,9 @@ impl<'a, W: World> Station<'a, W> {
         target: Joints,
         yaw: f64,
         load: Load,
-    ) -> Result<(Joints, Vec<Joints>), Failure> {
+    ) -> Result<(Joints, Route), Failure> {
         let first = match self.route(how, k, from, target, load) {
-            Ok(samples) => return Ok((target, samples)),
+            Ok(route) => return Ok((target, route)),
             Err(why @ (Failure::WouldCollide { .. } | Failure::NoPath { .. })) => why,
             Err(other) => return Err(other),
         };
@@ -261,7 +309,7 @@ impl<'a, W: World> Station<'a, W> {
             .find_map(|q| {
                 self.route(Connect::Straight, k, from, q, load)
                     .ok()
-                    .map(|samples| (q, samples))
+                    .map(|route| (q, route))
             })
             .ok_or(first)
     }
@@ -274,16 +322,93 @@ impl<'a, W: World> Station<'a, W> {
         start: Joints,
         waypoints: &[Joints],
         load: Load,
-    ) -> Result<Vec<Joints>, Failure> {
-        checked_samples(self.arm, &self.checker, start, waypoints, load).map_err(|e| match e {
-            Unchecked::Collides(hit) => Failure::WouldCollide { subgoal: k, hit },
-            Unchecked::Smoothing(reason) => Failure::Smoothing { subgoal: k, reason },
-        })
+    ) -> Result<Route, Failure> {
+        checked_samples(self.arm, &self.checker, start, waypoints, load)
+            .map(|samples| Route {
+                waypoints: waypoints.to_vec(),
+                samples,
+            })
+            .map_err(|e| match e {
+                Unchecked::Collides(hit) => Failure::WouldCollide { subgoal: k, hit },
+                Unchecked::Smoothing(reason) => Failure::Smoothing { subgoal: k, reason },
+            })
+    }
+
+    /// Sends `legs` from where the arm is, blended through the sub-goals
+    /// where the suction does not switch (the arm stops only where it
+    /// does) when those commands pass the check too, each sample checked
+    /// with its leg's load (in an overlap, the later leg's); else each
+    /// leg's own checked commands, stopping at every sub-goal. The suction
+    /// switches at the end of each leg that says so.
+    ///
+    /// With `keep_tail`, the legs after the last switch are not sent but
+    /// returned, to be sent with the next stage's (the lift blends into the
+    /// carry that follows); else everything is sent and the arm stops at
+    /// the end.
+    pub fn send_legs(&mut self, legs: Vec<Leg>, keep_tail: bool) -> Result<Vec<Leg>, Failure> {
+        let split = if keep_tail {
+            legs.iter()
+                .rposition(|l| l.suction != Suction::Keep)
+                .map_or(0, |i| i + 1)
+        } else {
+            legs.len()
+        };
+        let mut legs = legs;
+        let tail = legs.split_off(split);
+        if legs.is_empty() {
+            return Ok(tail);
+        }
+        let start = self.world.observe().joints;
+        let started = std::time::Instant::now();
+        let mut waypoints = Vec::new();
+        let mut stops = Vec::new();
+        // The leg of each waypoint, and the waypoint ending each leg.
+        let mut owner = Vec::new();
+        let mut ends = Vec::new();
+        for (j, leg) in legs.iter().enumerate() {
+            let n = leg.route.waypoints.len();
+            for (i, w) in leg.route.waypoints.iter().enumerate() {
+                waypoints.push(*w);
+                stops.push(i + 1 == n && leg.suction != Suction::Keep);
+                owner.push(j);
+            }
+            ends.push(waypoints.len().wrapping_sub(1));
+        }
+        let load_of = |w: usize| owner.get(w).map_or(Load::FREE, |&j| legs[j].load());
+        let blended = (legs.len() > 1)
+            .then(|| {
+                checked_blend_by(self.arm, &self.checker, start, &waypoints, &stops, load_of).ok()
+            })
+            .flatten();
+        self.clock.planning_s += started.elapsed().as_secs_f64();
+        let Some(blended) = blended else {
+            for leg in &legs {
+                self.send(&leg.route.samples, leg.suction)?;
+            }
+            return Ok(tail);
+        };
+        // Split at the stops: the commands up to each, then its switch.
+        let mut from = 0;
+        for (leg, end) in legs.iter().zip(ends) {
+            if leg.suction == Suction::Keep && end + 1 != waypoints.len() {
+                continue;
+            }
+            let to = blended
+                .at
+                .get(end)
+                .map_or(blended.samples.len(), |&i| i + 1);
+            self.send(blended.samples.get(from..to).unwrap_or(&[]), leg.suction)?;
+            from = to;
+        }
+        Ok(tail)
     }
 
     /// Sends checked commands, then switches the suction and lets things
     /// settle; fails on any contact the world reports.
     pub fn send(&mut self, samples: &[Joints], suction: Suction) -> Result<(), Failure> {
+        if self.clock.stop.is_none() {
+            self.clock.stop = Some(self.world.observe().joints);
+        }
         for q in samples {
             self.world.command(q)?;
             self.world.step()?;
@@ -304,10 +429,28 @@ impl<'a, W: World> Station<'a, W> {
             self.world.step()?;
             self.clock.steps += 1;
         }
+        if suction != Suction::Keep
+            && let Some(&end) = samples.last()
+        {
+            self.stopped_at(end);
+            self.clock.bound_s += settle as f64 * self.world.control_period();
+        }
         match self.world.take_collisions().into_iter().next() {
             Some(contact) => Err(Failure::Collision { contact }),
             None => Ok(()),
         }
+    }
+
+    /// The arm had to be at rest at `q` (a contact, a release, the end of
+    /// a product): the bound grows by the least time from the last such
+    /// stop.
+    fn stopped_at(&mut self, q: Joints) {
+        if let Some(from) = self.clock.stop {
+            // Both are within the limits (they were commanded), so Ruckig
+            // has a trajectory; if not, the bound stays what it was.
+            self.clock.bound_s += lower_bound(self.arm.limits, from, q).unwrap_or(0.0);
+        }
+        self.clock.stop = Some(q);
     }
 
     /// The clock of the product in hand, restarted.
@@ -322,6 +465,7 @@ impl<'a, W: World> Station<'a, W> {
             slot: self.task.cell.slots[s].name.clone(),
             planning_s: 0.0,
             execution_s: 0.0,
+            bound_s: 0.0,
             error_m: None,
             outcome: packwright_interface::Outcome::NotAttempted,
         }
@@ -336,9 +480,16 @@ impl<'a, W: World> Station<'a, W> {
         let period = self.world.control_period();
         let after = self.world.observe();
         row.error_m = self.error_of(&after, p, s);
-        let Clock { planning_s, steps } = self.restart_clock();
+        self.stopped_at(after.joints);
+        let Clock {
+            planning_s,
+            steps,
+            bound_s,
+            ..
+        } = self.restart_clock();
         row.planning_s = planning_s;
         row.execution_s = steps as f64 * period;
+        row.bound_s = bound_s;
     }
 
     /// How far product `p` is from its goal in slot `s` now.
@@ -412,10 +563,10 @@ pub enum Unchecked {
     Smoothing(String),
 }
 
-/// The smoothed 2 ms commands from `start` through `waypoints`, each
-/// checked for collision (the straight joint segment from the last checked
-/// sample, at most 1 degree on): the very commands that will be sent, or
-/// why they would not do.
+/// The smoothed 2 ms commands from `start` through `waypoints`, passing
+/// through the waypoints before the last without stopping where the
+/// check allows ([`checked_blend`] with no stops): the very commands that
+/// will be sent, or why they would not do.
 pub fn checked_samples(
     arm: &Arm,
     checker: &Checker,
@@ -423,23 +574,83 @@ pub fn checked_samples(
     waypoints: &[Joints],
     load: Load,
 ) -> Result<Vec<Joints>, Unchecked> {
-    let samples = smooth_path(arm.limits, start, waypoints)
-        .map_err(|e| Unchecked::Smoothing(e.to_string()))?;
+    checked_blend(arm, checker, start, waypoints, &[], load).map(|b| b.samples)
+}
+
+/// The blended 2 ms commands from `start` through `waypoints`, stopping
+/// where `stops` says (and at the last), each checked for collision (the
+/// straight joint segment from the last checked sample, at most 1 degree
+/// on). A corner whose blended commands would collide becomes a stop and
+/// the motion is blended again, so the commands are never less safe than
+/// stopping at every waypoint: when that collides too, this is the
+/// collision.
+pub fn checked_blend(
+    arm: &Arm,
+    checker: &Checker,
+    start: Joints,
+    waypoints: &[Joints],
+    stops: &[bool],
+    load: Load,
+) -> Result<Blended, Unchecked> {
+    checked_blend_by(arm, checker, start, waypoints, stops, |_| load)
+}
+
+/// [`checked_blend`] with a load per leg: `load_of(k)` for the leg ending
+/// at waypoint `k`; a sample is checked with its leg's load (in an
+/// overlap, the later leg's).
+pub fn checked_blend_by<'h>(
+    arm: &Arm,
+    checker: &Checker,
+    start: Joints,
+    waypoints: &[Joints],
+    stops: &[bool],
+    load_of: impl Fn(usize) -> Load<'h>,
+) -> Result<Blended, Unchecked> {
+    let mut stops: Vec<bool> = (0..waypoints.len())
+        .map(|k| stops.get(k).copied().unwrap_or(false))
+        .collect();
+    // Each round makes one more corner a stop: at most one per waypoint.
+    loop {
+        let motion = blend(arm.limits, start, waypoints, &stops)
+            .map_err(|e| Unchecked::Smoothing(e.to_string()))?;
+        let Some((i, hit)) = first_collision(checker, start, &motion, &load_of) else {
+            return Ok(motion);
+        };
+        match motion.corner_near(i) {
+            Some(k) => stops[k] = true,
+            None => return Err(Unchecked::Collides(hit)),
+        }
+    }
+}
+
+/// The first of `motion`'s samples (from `start`) whose motion collides:
+/// checked from the last checked sample once it is [`MAX_STEP`] away, at
+/// the last sample, and wherever the leg (and so the load) changes.
+fn first_collision<'h>(
+    checker: &Checker,
+    start: Joints,
+    motion: &Blended,
+    load_of: &impl Fn(usize) -> Load<'h>,
+) -> Option<(usize, Hit)> {
+    let samples = &motion.samples;
     let mut last = start;
     for (i, q) in samples.iter().enumerate() {
+        let leg = motion.leg_at(i);
+        let load = load_of(leg);
+        let changes = i + 1 < samples.len() && motion.leg_at(i + 1) != leg;
         let span = q
             .iter()
             .zip(&last)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
-        if span >= MAX_STEP || i + 1 == samples.len() {
+        if span >= MAX_STEP || i + 1 == samples.len() || changes {
             if let Some(hit) = checker.check_motion(&last, q, load.held, load.ignore) {
-                return Err(Unchecked::Collides(hit));
+                return Some((i, hit));
             }
             last = *q;
         }
     }
-    Ok(samples)
+    None
 }
 
 /// Joints that put the cup tip at `tip` pointing down with `yaw`, free of

@@ -1,0 +1,190 @@
+//! Blended motion: it keeps every limit in the commands a robot receives,
+//! stops exactly where told, is never slower than stopping everywhere, and
+//! stopping everywhere is what `smooth_path` commands.
+
+use std::f64::consts::{PI, TAU};
+
+use packwright_kinematics::{DOF, Joints, Limits};
+use packwright_motion::blend::blend;
+use packwright_motion::smoothing::{CONTROL_PERIOD, smooth_path};
+use proptest::prelude::*;
+
+const DEG: f64 = PI / 180.0;
+
+/// UR10-like limits, as in the smoother's tests.
+fn ur10() -> [Limits; DOF] {
+    let mut limits = [Limits {
+        lower: -TAU,
+        upper: TAU,
+        velocity: 180.0 * DEG,
+        acceleration: 2.5,
+        jerk: 15.0,
+    }; DOF];
+    limits[0].velocity = 120.0 * DEG;
+    limits[1].velocity = 120.0 * DEG;
+    limits
+}
+
+/// The commands' finite differences, as a drive sees them: by the mean
+/// value theorem a difference quotient is a derivative somewhere in its
+/// span, so a trajectory within its limits everywhere has quotients within
+/// them (up to rounding: 1e-6 relative).
+fn check_limits(limits: &[Limits; DOF], start: Joints, samples: &[Joints]) {
+    let dt = CONTROL_PERIOD;
+    // The start is at rest: pad with it.
+    let mut q = vec![start; 3];
+    q.extend_from_slice(samples);
+    // And the end: the last command is held.
+    let last = *samples.last().unwrap();
+    q.extend([last; 3]);
+    for (j, l) in limits.iter().enumerate() {
+        for w in q.windows(4) {
+            let v = (w[3][j] - w[2][j]) / dt;
+            let a = (w[3][j] - 2.0 * w[2][j] + w[1][j]) / dt.powi(2);
+            let jerk = (w[3][j] - 3.0 * w[2][j] + 3.0 * w[1][j] - w[0][j]) / dt.powi(3);
+            assert!(l.contains(w[3][j]), "joint {j} at {} out of range", w[3][j]);
+            assert!(
+                v.abs() <= l.velocity * (1.0 + 1e-6),
+                "joint {j} velocity {v}"
+            );
+            assert!(
+                a.abs() <= l.acceleration * (1.0 + 1e-6) + 1e-6,
+                "joint {j} acceleration {a}"
+            );
+            // Positions carry ~1e-16 rad of rounding; a third difference
+            // over 2 ms multiplies it by 1.25e8.
+            assert!(
+                jerk.abs() <= l.jerk * (1.0 + 1e-6) + 1e-5,
+                "joint {j} jerk {jerk}"
+            );
+        }
+    }
+}
+
+const START: Joints = [0.0, -1.57, 1.2, -1.2, -1.57, 0.0];
+
+#[test]
+fn stopping_everywhere_is_what_smooth_path_commands() {
+    let limits = ur10();
+    let waypoints = [
+        [0.4, -1.2, 1.5, -1.8, -1.57, 0.4],
+        [1.2, -1.0, 1.0, -1.6, -1.57, 1.2],
+        [1.2, -1.3, 1.4, -1.7, -1.57, 1.2],
+    ];
+    let stopped = blend(limits, START, &waypoints, &[true; 3]).unwrap();
+    let smoothed = smooth_path(limits, START, &waypoints).unwrap();
+    assert!(stopped.samples.len().abs_diff(smoothed.len()) <= waypoints.len());
+    // Both stop at every waypoint, exactly.
+    for w in &waypoints {
+        assert!(stopped.samples.contains(w));
+        assert!(smoothed.contains(w));
+    }
+    assert!(
+        stopped
+            .corners
+            .iter()
+            .all(|c| c.overlap == 0.0 && c.miss == 0.0)
+    );
+}
+
+#[test]
+fn passing_through_is_faster_and_within_limits() {
+    let limits = ur10();
+    // Hover, top face, lift, approach, above the slot, release: the shape
+    // of a product's motion.
+    let waypoints = [
+        [0.3, -1.4, 1.6, -1.8, -1.57, 0.3],
+        [0.3, -1.3, 1.7, -1.95, -1.57, 0.3],
+        [0.3, -1.4, 1.6, -1.8, -1.57, 0.3],
+        [1.0, -1.5, 1.4, -1.5, -1.57, 1.0],
+        [1.7, -1.4, 1.5, -1.7, -1.57, 1.7],
+        [1.7, -1.3, 1.7, -1.95, -1.57, 1.7],
+    ];
+    let stops = [false, true, false, false, false, true];
+    let stopped = blend(limits, START, &waypoints, &[true; 6]).unwrap();
+    let blended = blend(limits, START, &waypoints, &stops).unwrap();
+    check_limits(&limits, START, &blended.samples);
+    assert!(
+        blended.duration() < 0.85 * stopped.duration(),
+        "blended {:.3} s, stopped {:.3} s",
+        blended.duration(),
+        stopped.duration()
+    );
+    // The stops are commanded exactly, and the last sample is the last
+    // waypoint.
+    assert!(blended.samples.contains(&waypoints[1]));
+    assert_eq!(blended.samples.last(), Some(&waypoints[5]));
+    assert_eq!(blended.corners[1].overlap, 0.0);
+    // The corners passed through were blended, and say how close.
+    for k in [0, 2, 3, 4] {
+        let c = &blended.corners[k];
+        assert!(c.overlap > 0.0, "corner {k} not blended");
+        assert!(c.miss > 0.0 && c.miss < 0.5, "corner {k} miss {}", c.miss);
+        assert!(!c.samples.is_empty());
+        let middle = (c.samples.start + c.samples.end) / 2;
+        assert_eq!(blended.corner_near(middle), Some(k));
+    }
+}
+
+#[test]
+fn no_waypoints_no_samples() {
+    let b = blend(ur10(), START, &[], &[]).unwrap();
+    assert!(b.samples.is_empty() && b.corners.is_empty());
+}
+
+#[test]
+fn bad_waypoints_are_errors() {
+    let mut far = START;
+    far[1] = 10.0;
+    assert!(blend(ur10(), START, &[far], &[]).is_err());
+    let mut nan = START;
+    nan[2] = f64::NAN;
+    assert!(blend(ur10(), START, &[START, nan], &[]).is_err());
+}
+
+fn joints() -> impl Strategy<Value = Joints> {
+    prop::array::uniform6(-2.5f64..2.5)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
+
+    /// Over thousands of random waypoint sequences with random stops:
+    /// every command keeps the limits, every stop is commanded exactly,
+    /// the last command is the last waypoint, and blending never takes
+    /// longer than stopping everywhere.
+    #[test]
+    fn blended_motion_keeps_its_contract(
+        waypoints in prop::collection::vec(joints(), 1..7),
+        stops in prop::collection::vec(any::<bool>(), 7),
+        scale in 0.001f64..1.0,
+    ) {
+        // Small moves too: scale the sequence towards the start.
+        let waypoints: Vec<Joints> = waypoints
+            .iter()
+            .map(|w| std::array::from_fn(|j| START[j] + scale * (w[j] - START[j])))
+            .collect();
+        let limits = ur10();
+        let blended = blend(limits, START, &waypoints, &stops).unwrap();
+        let stopped = blend(limits, START, &waypoints, &[true; 7]).unwrap();
+        prop_assert!(!blended.samples.is_empty());
+        check_limits(&limits, START, &blended.samples);
+        prop_assert_eq!(blended.samples.last(), waypoints.last());
+        for (k, w) in waypoints.iter().enumerate().take(waypoints.len() - 1) {
+            if stops[k] {
+                prop_assert!(blended.samples.contains(w), "stop {} not commanded", k);
+                prop_assert_eq!(blended.corners[k].overlap, 0.0);
+            }
+        }
+        prop_assert!(blended.samples.len() <= stopped.samples.len());
+        // Consecutive commands are never further apart than one cycle at
+        // full speed.
+        let mut last = START;
+        for q in &blended.samples {
+            for j in 0..DOF {
+                prop_assert!((q[j] - last[j]).abs() <= limits[j].velocity * CONTROL_PERIOD * (1.0 + 1e-6));
+            }
+            last = *q;
+        }
+    }
+}
