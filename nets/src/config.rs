@@ -122,7 +122,7 @@ pub struct SavedConfig {
 }
 
 /// The schema `config.json` declares.
-pub const SCHEMA: &str = "packwright.model/2";
+pub const SCHEMA: &str = "packwright.model/3";
 
 /// The files of a model directory.
 pub const FILES: [&str; 4] = [

@@ -32,6 +32,32 @@ pub const ACTION_SCALE: f32 = packwright_interface::record::MAX_ACTION as f32;
 /// product seen to 1 for the last), distance from its goal (decimetres,
 /// at most 3), height of its bottom over the table (decimetres, 0 to 3).
 pub const NODE_FEATURES: usize = 4;
+/// The column of a node row holding its place along the chain.
+pub const PLACE: usize = 1;
+/// The node row without its place ([`own_row`]): what a node's score
+/// network reads. The place enters the score only through one learned
+/// non-negative slope (later along the chain, lower), so among products
+/// that are otherwise alike the earlier one always scores higher, for
+/// any pair of places, taught together or not.
+pub const OWN_FEATURES: usize = NODE_FEATURES - 1;
+
+/// A node row without its place column.
+pub fn own_row(row: &[f32; NODE_FEATURES]) -> [f32; OWN_FEATURES] {
+    std::array::from_fn(|i| if i < PLACE { row[i] } else { row[i + 1] })
+}
+
+/// How much the chain slope moves per unit of its parameter: one scalar
+/// learnt at the networks' learning rate would take tens of thousands of
+/// steps to separate places a quarter apart by a confident margin.
+pub const CHAIN_SCALE: f32 = 30.0;
+
+/// The chain slope from its stored parameter: `CHAIN_SCALE *
+/// softplus(raw)`, so that it is never negative.
+pub fn chain_slope(raw: f32) -> f32 {
+    let softplus = if raw > 20.0 { raw } else { raw.exp().ln_1p() };
+    CHAIN_SCALE * softplus
+}
+
 /// Inputs per slot: (dx, dy) from the held product's goal to the slot, and
 /// their length (decimetres).
 pub const SLOT_FEATURES: usize = 3;

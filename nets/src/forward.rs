@@ -14,7 +14,9 @@
 //! after a ReLU about half are (`cargo bench -p packwright-nets --bench
 //! learning` measures these passes).
 
-use crate::features::{ACTION_INPUTS, NODE_FEATURES, SLOT_FEATURES, action_input};
+use crate::features::{
+    ACTION_INPUTS, NODE_FEATURES, OWN_FEATURES, PLACE, SLOT_FEATURES, action_input, own_row,
+};
 
 /// A dense layer: `y = W x + b`.
 #[derive(Debug, Clone)]
@@ -153,8 +155,12 @@ pub struct SageWeights {
 #[derive(Debug, Clone)]
 pub struct ReasonerWeights {
     pub layers: Vec<SageWeights>,
+    /// A node's score network, on its row without the place.
     pub node_hidden: Dense,
     pub node_score: Dense,
+    /// The chain slope (>= 0): a node's score falls by this much per unit
+    /// of place along the chain.
+    pub chain: f32,
     pub box_hidden: Dense,
     pub box_score: Dense,
     /// The slot pointer: a score per slot from its row.
@@ -226,11 +232,19 @@ impl ReasonerWeights {
                 h[..m * o].copy_from_slice(&out[..m * o]);
                 w = o;
             }
-            // Node scores from the nodes' own inputs.
+            // Node scores from the nodes' own inputs, less the chain
+            // slope times the place.
+            let own = &mut mean[..m * OWN_FEATURES];
+            for (row, node) in own.chunks_exact_mut(OWN_FEATURES).zip(nodes) {
+                row.copy_from_slice(&own_row(node));
+            }
             let k = self.node_hidden.outputs;
-            self.node_hidden.apply_into(x, m, out);
+            self.node_hidden.apply_into(own, m, out);
             out[..m * k].iter_mut().for_each(|v| *v = v.max(0.0));
             self.node_score.apply_into(&out[..m * k], m, &mut scores);
+            for (score, node) in scores.iter_mut().zip(nodes) {
+                *score -= self.chain * node[PLACE];
+            }
             // The box: max of the embeddings (>= 0; when there are
             // GraphSAGE layers) and of the raw inputs.
             let e = if self.layers.is_empty() { 0 } else { w };
@@ -321,5 +335,59 @@ impl DynamicsWeights {
         std::array::from_fn(|j| {
             moved.get(j).copied().unwrap_or(0.0) - still.get(j).copied().unwrap_or(0.0)
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A deterministic stream of numbers in [-1, 1).
+    fn numbers(seed: u64) -> impl FnMut() -> f32 {
+        let mut x = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+        move || {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((x >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+        }
+    }
+
+    fn dense(inputs: usize, outputs: usize, next: &mut impl FnMut() -> f32) -> Dense {
+        let w = (0..inputs * outputs).map(|_| 2.0 * next()).collect();
+        let b = (0..outputs).map(|_| next()).collect();
+        Dense::new(inputs, outputs, w, Some(b)).expect("shapes")
+    }
+
+    /// Whatever the weights, of two nodes alike but for their place along
+    /// the chain the earlier scores at least as high: the chain order
+    /// holds for every pair of places, taught together or not.
+    #[test]
+    fn an_earlier_node_never_scores_lower_than_a_later_one_like_it() {
+        for seed in 0..200 {
+            let mut next = numbers(seed);
+            let h = 8;
+            let weights = ReasonerWeights {
+                layers: Vec::new(),
+                node_hidden: dense(OWN_FEATURES, h, &mut next),
+                node_score: dense(h, 1, &mut next),
+                chain: crate::features::chain_slope(3.0 * next()),
+                box_hidden: dense(NODE_FEATURES, h, &mut next),
+                box_score: dense(h, 1, &mut next),
+                pointer: Vec::new(),
+            };
+            let own = [1.0, 3.0 * next().abs(), 3.0 * next().abs()];
+            let row = |place: f32| [own[0], place, own[1], own[2]];
+            let (a, b) = (next().abs(), next().abs());
+            let (early, late) = (a.min(b), a.max(b));
+            let filler = [0.0, 0.5, 0.0, 0.0];
+            let scores = weights.scores(&[row(late), filler, row(early)]);
+            assert!(
+                scores[2] >= scores[0],
+                "seed {seed}: place {early} scores {} < place {late} scores {}",
+                scores[2],
+                scores[0]
+            );
+        }
     }
 }

@@ -8,8 +8,8 @@
 use crate::config::{ModelConfig, SCHEMA, SavedConfig, Task, TrainConfig};
 use crate::error::ModelError;
 use crate::features::{
-    ACTION_INPUTS, ACTION_SCALE, NODE_FEATURES, SLOT_FEATURES, SUBGOAL_INPUTS, node_rows,
-    slot_rows, subgoal_input, subgoal_position,
+    ACTION_INPUTS, ACTION_SCALE, NODE_FEATURES, OWN_FEATURES, SLOT_FEATURES, SUBGOAL_INPUTS,
+    chain_slope, node_rows, slot_rows, subgoal_input, subgoal_position,
 };
 use crate::forward::{Dense, DynamicsWeights, ReasonerWeights, SageWeights, SubGoalWeights};
 use packwright_interface::{Choice, Graph, Node, Policy, SequenceRule, Stage, SubGoalQuery};
@@ -178,8 +178,9 @@ impl Networks {
             .collect::<Result<_, ModelError>>()?;
         let reasoner = ReasonerWeights {
             layers,
-            node_hidden: r.dense("node_hidden", NODE_FEATURES, h)?,
+            node_hidden: r.dense("node_hidden", OWN_FEATURES, h)?,
             node_score: r.dense("node_score", h, 1)?,
+            chain: chain_slope(r.tensor("chain.weight", &[1, 1])?[0]),
             box_hidden: r.dense("box_hidden", box_inputs(c), h)?,
             box_score: r.dense("box_score", h, 1)?,
             pointer: denses(&r, "pointer", &[(SLOT_FEATURES, k), (k, k), (k, 1)])?,

@@ -4,9 +4,12 @@
 use crate::data::GraphBatch;
 use burn::nn::{Linear, LinearConfig};
 use burn::prelude::*;
-use burn::tensor::activation::{relu, tanh};
+use burn::tensor::activation::{relu, softplus, tanh};
 use packwright_nets::ModelConfig;
-use packwright_nets::features::{ACTION_INPUTS, NODE_FEATURES, SLOT_FEATURES, SUBGOAL_INPUTS};
+use packwright_nets::features::{
+    ACTION_INPUTS, CHAIN_SCALE, NODE_FEATURES, OWN_FEATURES, PLACE, SLOT_FEATURES, SUBGOAL_INPUTS,
+    chain_slope,
+};
 use packwright_nets::forward::{
     Dense, DynamicsWeights, ReasonerWeights, SageWeights, SubGoalWeights,
 };
@@ -74,6 +77,10 @@ pub struct Reasoner {
     layers: Vec<Sage>,
     node_hidden: Linear,
     node_score: Linear,
+    /// The chain slope's parameter (one weight, no bias): the score falls
+    /// by `CHAIN_SCALE * softplus(weight)` per unit of place along the
+    /// chain.
+    chain: Linear,
     box_hidden: Linear,
     box_score: Linear,
     pointer: Vec<Linear>,
@@ -99,8 +106,9 @@ impl Reasoner {
         let k = c.pointer_hidden;
         Reasoner {
             layers,
-            node_hidden: linear(NODE_FEATURES, h, device),
+            node_hidden: linear(OWN_FEATURES, h, device),
             node_score: linear(h, 1, device),
+            chain: LinearConfig::new(1, 1).with_bias(false).init(device),
             box_hidden: linear(box_inputs(c), h, device),
             box_score: linear(h, 1, device),
             pointer: vec![
@@ -124,9 +132,16 @@ impl Reasoner {
             h = layer.forward(h, adjacency.clone(), mask.clone());
         }
         let [b, m, _] = h.dims();
-        let node = self
-            .node_score
-            .forward(relu(self.node_hidden.forward(nodes.clone())))
+        let own = Tensor::cat(
+            vec![
+                nodes.clone().slice([0..b, 0..m, 0..PLACE]),
+                nodes.clone().slice([0..b, 0..m, PLACE + 1..NODE_FEATURES]),
+            ],
+            2,
+        );
+        let place = nodes.clone().slice([0..b, 0..m, PLACE..PLACE + 1]);
+        let slope = softplus(self.chain.weight.val().reshape([1, 1, 1]), 1.0) * CHAIN_SCALE;
+        let node = (self.node_score.forward(relu(self.node_hidden.forward(own))) - place * slope)
             .reshape([b, m]);
         let width = h.dims()[2];
         let raw_max = (nodes + (mask - 1.0) * 1e3)
@@ -176,6 +191,16 @@ impl Reasoner {
                 .collect::<Option<_>>()?,
             node_hidden: dense(&self.node_hidden)?,
             node_score: dense(&self.node_score)?,
+            chain: chain_slope(
+                *self
+                    .chain
+                    .weight
+                    .val()
+                    .into_data()
+                    .try_to_vec::<f32>()
+                    .ok()?
+                    .first()?,
+            ),
             box_hidden: dense(&self.box_hidden)?,
             box_score: dense(&self.box_score)?,
             pointer: denses(&self.pointer)?,
