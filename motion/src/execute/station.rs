@@ -367,12 +367,21 @@ impl<'a, W: World> Station<'a, W> {
         let mut ends = Vec::new();
         for (j, leg) in legs.iter().enumerate() {
             let n = leg.route.waypoints.len();
+            let switches = leg.suction != Suction::Keep;
             for (i, w) in leg.route.waypoints.iter().enumerate() {
                 waypoints.push(*w);
-                stops.push(i + 1 == n && leg.suction != Suction::Keep);
+                stops.push(i + 1 == n && switches);
                 owner.push(j);
             }
-            ends.push(waypoints.len().wrapping_sub(1));
+            // A leg that does not move (its sub-goal already reached)
+            // switches where the leg before it ends: the arm stops there.
+            if n == 0
+                && switches
+                && let Some(last) = stops.last_mut()
+            {
+                *last = true;
+            }
+            ends.push(waypoints.len().checked_sub(1));
         }
         let load_of = |w: usize| owner.get(w).map_or(Load::FREE, |&j| legs[j].load());
         let blended = (legs.len() > 1)
@@ -390,13 +399,14 @@ impl<'a, W: World> Station<'a, W> {
         // Split at the stops: the commands up to each, then its switch.
         let mut from = 0;
         for (leg, end) in legs.iter().zip(ends) {
-            if leg.suction == Suction::Keep && end + 1 != waypoints.len() {
+            let last = end.is_some_and(|e| e + 1 == waypoints.len());
+            if leg.suction == Suction::Keep && !last {
                 continue;
             }
-            let to = blended
-                .at
-                .get(end)
-                .map_or(blended.samples.len(), |&i| i + 1);
+            // No waypoint yet: the arm is at rest where it starts.
+            let to = end.map_or(0, |e| {
+                blended.at.get(e).map_or(blended.samples.len(), |&i| i + 1)
+            });
             self.send(blended.samples.get(from..to).unwrap_or(&[]), leg.suction)?;
             from = to;
         }
