@@ -38,7 +38,7 @@
 use rsruckig::prelude::*;
 
 use crate::error::{Position, SmoothingError};
-use crate::smoothing::{CONTROL_PERIOD, ruckig_input};
+use crate::smoothing::{CONTROL_PERIOD, rest_to_rest, ruckig_input};
 use packwright_interface::{DOF, Joints, Limits};
 
 /// How many overlaps are tried per corner, from the largest room down.
@@ -161,27 +161,13 @@ fn leg(
     to: Joints,
     waypoint: usize,
 ) -> Result<Leg, SmoothingError> {
-    input.current_position.copy_from_slice(&from);
-    input.current_velocity.fill(0.0);
-    input.current_acceleration.fill(0.0);
-    input.target_position.copy_from_slice(&to);
-    let mut trajectory = Trajectory::new(None);
-    let fail = |reason: String| SmoothingError::NoTrajectory { from, to, reason };
-    match otg.calculate(input, &mut trajectory) {
-        Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => {}
-        Ok(other) => return Err(fail(format!("Ruckig returned {other:?}"))),
-        Err(e) => return Err(fail(e.to_string())),
-    }
-    let duration = trajectory.get_duration();
-    if !duration.is_finite() || duration < 0.0 {
-        return Err(SmoothingError::BadDuration { waypoint, duration });
-    }
+    let trajectory = rest_to_rest(otg, input, from, to, waypoint)?;
     Ok(Leg {
         start: 0.0,
         from,
         to,
+        duration: trajectory.get_duration(),
         trajectory,
-        duration,
     })
 }
 
@@ -283,28 +269,26 @@ pub fn blend(
     // Place the legs in time, corner by corner.
     let mut overlaps = vec![0.0; legs.len().saturating_sub(1)];
     let mut previous = 0.0;
+    let stop_at = |i: usize| i + 1 == waypoints.len() || stops.get(i).copied().unwrap_or(false);
+    // A leg leaving or reaching a stop keeps its half next to it straight
+    // (rest-to-rest profiles are symmetric: half the time is half the way).
+    let half = |leg: &Leg, near_stop: bool| {
+        if near_stop {
+            0.5 * leg.duration
+        } else {
+            leg.duration
+        }
+    };
     for k in 0..overlaps.len() {
         let (done, next) = legs.split_at_mut(k + 1);
         let (a, b) = (&done[k], &mut next[0]);
         let end = a.start + a.duration;
-        let stop = stops.get(k).copied().unwrap_or(false);
-        let stop_at = |i: usize| i + 1 == waypoints.len() || stops.get(i).copied().unwrap_or(false);
-        // A leg leaving or reaching a stop keeps its half next to it
-        // straight (rest-to-rest profiles are symmetric: half the time is
-        // half the way).
-        let half = |leg: &Leg, near_stop: bool| {
-            if near_stop {
-                0.5 * leg.duration
-            } else {
-                leg.duration
-            }
-        };
         let leaves_stop = k == 0 || stop_at(k - 1);
         let room = (half(a, leaves_stop) - previous)
             .min(half(b, stop_at(k + 1)))
             .max(0.0);
         let mut chosen = 0.0;
-        if !stop && room > dt {
+        if !stop_at(k) && room > dt {
             for c in 0..CANDIDATES {
                 let o = room * (CANDIDATES - c) as f64 / CANDIDATES as f64;
                 b.start = end - o;

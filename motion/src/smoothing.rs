@@ -302,41 +302,13 @@ pub fn duration_of(
     start: Joints,
     waypoints: &[Joints],
 ) -> Result<f64, SmoothingError> {
-    let mut smoother = Smoother::new(limits, start)?;
-    let Smoother {
-        otg, input, output, ..
-    } = &mut smoother;
-    let trajectory = &mut output.trajectory;
+    let (mut otg, mut input) = ruckig_input(&limits, start)?;
     let mut total = 0.0;
+    let mut from = start;
     for (i, w) in waypoints.iter().enumerate() {
         check_position(&limits, w, Position::Waypoint(i))?;
-        input.target_position.copy_from_slice(w);
-        match otg.calculate(input, trajectory) {
-            Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => {}
-            Ok(other) => {
-                return Err(SmoothingError::NoTrajectory {
-                    from: to_joints(&input.current_position),
-                    to: *w,
-                    reason: format!("Ruckig returned {other:?}"),
-                });
-            }
-            Err(e) => {
-                return Err(SmoothingError::NoTrajectory {
-                    from: to_joints(&input.current_position),
-                    to: *w,
-                    reason: e.to_string(),
-                });
-            }
-        }
-        let d = trajectory.get_duration();
-        if !d.is_finite() || d < 0.0 {
-            return Err(SmoothingError::BadDuration {
-                waypoint: i,
-                duration: d,
-            });
-        }
-        total += d;
-        input.current_position.copy_from_slice(w);
+        total += rest_to_rest(&mut otg, &mut input, from, *w, i)?.get_duration();
+        from = *w;
     }
     Ok(total)
 }
@@ -348,19 +320,40 @@ pub fn duration_of(
 pub fn lower_bound(limits: [Limits; DOF], from: Joints, to: Joints) -> Result<f64, SmoothingError> {
     let (mut otg, mut input) = ruckig_input(&limits, from)?;
     check_position(&limits, &to, Position::Target)?;
-    input.target_position.copy_from_slice(&to);
-    let mut trajectory = Trajectory::new(None);
-    let fail = |reason: String| SmoothingError::NoTrajectory { from, to, reason };
-    match otg.calculate(&input, &mut trajectory) {
-        Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => {}
-        Ok(other) => return Err(fail(format!("Ruckig returned {other:?}"))),
-        Err(e) => return Err(fail(e.to_string())),
-    }
-    Ok(trajectory
+    Ok(rest_to_rest(&mut otg, &mut input, from, to, 0)?
         .get_independent_min_durations()
         .iter()
         .copied()
         .fold(0.0, f64::max))
+}
+
+/// The time-optimal trajectory from rest at `from` to rest at `to` (the
+/// leg to waypoint `waypoint`), computed offline with `otg` and `input`
+/// ([`ruckig_input`]), its duration checked: what [`duration_of`],
+/// [`lower_bound`] and [`blend`](crate::blend::blend) plan with.
+pub(crate) fn rest_to_rest(
+    otg: &mut Ruckig<DOF, ThrowErrorHandler>,
+    input: &mut InputParameter<DOF>,
+    from: Joints,
+    to: Joints,
+    waypoint: usize,
+) -> Result<Trajectory<DOF>, SmoothingError> {
+    input.current_position.copy_from_slice(&from);
+    input.current_velocity.fill(0.0);
+    input.current_acceleration.fill(0.0);
+    input.target_position.copy_from_slice(&to);
+    let mut trajectory = Trajectory::new(None);
+    let fail = |reason: String| SmoothingError::NoTrajectory { from, to, reason };
+    match otg.calculate(input, &mut trajectory) {
+        Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => {}
+        Ok(other) => return Err(fail(format!("Ruckig returned {other:?}"))),
+        Err(e) => return Err(fail(e.to_string())),
+    }
+    let duration = trajectory.get_duration();
+    if !duration.is_finite() || duration < 0.0 {
+        return Err(SmoothingError::BadDuration { waypoint, duration });
+    }
+    Ok(trajectory)
 }
 
 /// A Ruckig generator at the control rate and its input for `limits`
