@@ -35,24 +35,20 @@ pub struct Run {
 impl Run {
     pub fn of(r: &Report) -> Run {
         let failure = r.first_problem();
+        let (execution_s, bound_s) = r
+            .products
+            .iter()
+            .filter(|p| p.outcome == Outcome::Packed)
+            .map(|p| (p.execution_s, p.bound_s))
+            .unzip();
         Run {
             success: failure.is_none(),
             failure,
             fallbacks: r.fallbacks.iter().map(|f| f.kind()).collect(),
             violations: r.violations.len(),
             timing: r.timing.clone(),
-            execution_s: r
-                .products
-                .iter()
-                .filter(|p| p.outcome == Outcome::Packed)
-                .map(|p| p.execution_s)
-                .collect(),
-            bound_s: r
-                .products
-                .iter()
-                .filter(|p| p.outcome == Outcome::Packed)
-                .map(|p| p.bound_s)
-                .collect(),
+            execution_s,
+            bound_s,
         }
     }
 }

@@ -58,21 +58,35 @@ impl Check {
         Ok(())
     }
 
-    pub(super) fn length_in(&self, at: &Field, v: f64, (min, max): (f64, f64)) -> Result<()> {
-        self.finite(at, v)?;
-        if (min..=max).contains(&v) {
-            Ok(())
-        } else {
-            Err(self.fail(at, P::LengthOutOfRange { value: v, min, max }))
-        }
+    pub(super) fn length_in(&self, at: &Field, v: f64, range: (f64, f64)) -> Result<()> {
+        self.within(at, v, range, |value, min, max| P::LengthOutOfRange {
+            value,
+            min,
+            max,
+        })
     }
 
-    pub(super) fn share_in(&self, at: &Field, v: f64, (min, max): (f64, f64)) -> Result<()> {
+    pub(super) fn share_in(&self, at: &Field, v: f64, range: (f64, f64)) -> Result<()> {
+        self.within(at, v, range, |value, min, max| P::ShareOutOfRange {
+            value,
+            min,
+            max,
+        })
+    }
+
+    /// `v` finite and in `min..=max`, else the problem `outside` names.
+    fn within(
+        &self,
+        at: &Field,
+        v: f64,
+        (min, max): (f64, f64),
+        outside: fn(f64, f64, f64) -> P,
+    ) -> Result<()> {
         self.finite(at, v)?;
         if (min..=max).contains(&v) {
             Ok(())
         } else {
-            Err(self.fail(at, P::ShareOutOfRange { value: v, min, max }))
+            Err(self.fail(at, outside(v, min, max)))
         }
     }
 
