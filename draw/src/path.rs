@@ -1,0 +1,214 @@
+//! The executed tool path: where the cup tip went, in which stage, and the
+//! events along it (sub-goals where the arm came to rest, the suction's
+//! switches, fallbacks, the point of a failure).
+//!
+//! The path is built from what a `World` sees (commanded joints through
+//! forward kinematics, and the suction), so it is the same for any
+//! planner. Sub-goals that a blend passes through without stopping leave
+//! no trace there; the numbered markers are the arm's rests.
+
+/// What the arm is doing, from the suction's state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Suction off, going to a product (or from the start).
+    Approach,
+    /// Suction on: carrying a product.
+    Carry,
+    /// Suction off after a release, until the arm first comes to rest.
+    Retreat,
+}
+
+impl Stage {
+    /// The CSS class and legend name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Approach => "approach",
+            Stage::Carry => "carry",
+            Stage::Retreat => "retreat",
+        }
+    }
+
+    /// The stroke colour.
+    pub fn colour(self) -> &'static str {
+        match self {
+            Stage::Approach => "#1f77b4",
+            Stage::Carry => "#2ca02c",
+            Stage::Retreat => "#9467bd",
+        }
+    }
+}
+
+/// One control cycle as the world saw it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// The cup tip (world frame, m).
+    pub tip: [f64; 3],
+    /// Whether the suction is on.
+    pub suction: bool,
+    /// Whether the command equals the one before (the arm is at rest).
+    pub resting: bool,
+}
+
+/// Something that happened at a point of the path.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EventKind {
+    /// The arm came to rest: the n-th rest (from 1).
+    SubGoal(usize),
+    /// The suction switched on.
+    Pick,
+    /// The suction switched off.
+    Release,
+    /// A stage handed to RRT-Connect, and why (for people).
+    Fallback(String),
+    /// Where the arm stopped on a failure, and why.
+    Failure(String),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Event {
+    pub at: [f64; 3],
+    pub kind: EventKind,
+}
+
+/// A path to draw: points with their stage (thinned: consecutive points at
+/// least [`ToolPath::STEP`] apart, stage changes and the end kept) and
+/// events.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ToolPath {
+    pub points: Vec<([f64; 3], Stage)>,
+    pub events: Vec<Event>,
+}
+
+impl ToolPath {
+    /// The thinning distance (m).
+    pub const STEP: f64 = 0.002;
+
+    /// The path of `samples` (one per control cycle, in order): stages from
+    /// the suction, a `Pick`/`Release` where it switches, a numbered
+    /// `SubGoal` at the start of every rest after the arm first moved.
+    pub fn from_samples(samples: &[Sample]) -> ToolPath {
+        let mut path = ToolPath::default();
+        let mut stage = Stage::Approach;
+        let mut moved_since_release = false;
+        let mut has_moved = false;
+        let mut was_resting = true;
+        let mut suction = false;
+        let mut rests = 0;
+        for (i, s) in samples.iter().enumerate() {
+            if s.suction != suction {
+                suction = s.suction;
+                path.events.push(Event {
+                    at: s.tip,
+                    kind: if suction {
+                        EventKind::Pick
+                    } else {
+                        EventKind::Release
+                    },
+                });
+                stage = if suction {
+                    Stage::Carry
+                } else {
+                    moved_since_release = false;
+                    Stage::Retreat
+                };
+            }
+            if !s.resting {
+                has_moved = true;
+                moved_since_release = true;
+            }
+            let last = path.points.last().copied();
+            let keep = match last {
+                None => true,
+                Some((p, st)) => {
+                    st != stage || distance(p, s.tip) >= Self::STEP || i + 1 == samples.len()
+                }
+            };
+            if keep {
+                path.points.push((s.tip, stage));
+            }
+            if s.resting && !was_resting && has_moved {
+                rests += 1;
+                path.events.push(Event {
+                    at: s.tip,
+                    kind: EventKind::SubGoal(rests),
+                });
+                // The rest that ends a retreat still belongs to it.
+                if stage == Stage::Retreat && moved_since_release {
+                    stage = Stage::Approach;
+                }
+            }
+            was_resting = s.resting;
+        }
+        path
+    }
+
+    /// Where the path ends (the arm's last commanded tip).
+    pub fn end(&self) -> Option<[f64; 3]> {
+        self.points.last().map(|(p, _)| *p)
+    }
+}
+
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn s(x: f64, suction: bool, resting: bool) -> Sample {
+        Sample {
+            tip: [x, 0.0, 0.5],
+            suction,
+            resting,
+        }
+    }
+
+    #[test]
+    fn stages_follow_the_suction_and_rests_are_numbered() {
+        let samples = [
+            s(0.0, false, true),
+            s(0.1, false, false),
+            s(0.2, false, true), // rest 1
+            s(0.2, true, true),  // pick
+            s(0.3, true, false),
+            s(0.4, true, true),  // rest 2
+            s(0.4, false, true), // release
+            s(0.5, false, false),
+            s(0.6, false, true), // rest 3: retreat ends
+            s(0.7, false, false),
+        ];
+        let path = ToolPath::from_samples(&samples);
+        let stages: Vec<Stage> = path.points.iter().map(|(_, st)| *st).collect();
+        use Stage::*;
+        assert_eq!(
+            stages,
+            [
+                Approach, Approach, Approach, Carry, Carry, Carry, Retreat, Retreat, Retreat,
+                Approach
+            ]
+        );
+        let kinds: Vec<&EventKind> = path.events.iter().map(|e| &e.kind).collect();
+        assert_eq!(
+            kinds,
+            [
+                &EventKind::SubGoal(1),
+                &EventKind::Pick,
+                &EventKind::SubGoal(2),
+                &EventKind::Release,
+                &EventKind::SubGoal(3),
+            ]
+        );
+        assert_eq!(path.end(), Some([0.7, 0.0, 0.5]));
+    }
+
+    #[test]
+    fn close_points_are_thinned_but_the_end_is_kept() {
+        let samples: Vec<Sample> = (0..=100)
+            .map(|i| s(f64::from(i) * 0.0001, false, false))
+            .collect();
+        let path = ToolPath::from_samples(&samples);
+        assert!(path.points.len() < 10, "{}", path.points.len());
+        assert_eq!(path.end(), Some([0.01, 0.0, 0.5]));
+    }
+}
