@@ -50,6 +50,51 @@ pub enum WorldError {
     /// A product's state became invalid (the physics diverged).
     #[error("product {product} left the simulation")]
     ProductLost { product: String },
+    /// A real robot stopped, or its driver stopped commanding it; the fault
+    /// is latched and no further command is sent.
+    #[error("the robot stopped: {reason}")]
+    Stopped { reason: StopReason },
+}
+
+/// Why a real robot stopped (or its driver stopped commanding it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum StopReason {
+    /// The controller's protective stop (a collision or a limit).
+    ProtectiveStop,
+    /// An emergency stop (the robot's or the system's).
+    EmergencyStop,
+    /// A safeguard stop (a safety input such as a light curtain).
+    SafeguardStop,
+    /// Another safety mode than normal or reduced (violation, fault,
+    /// recovery...).
+    SafetyFault,
+    /// The arm is not powered and running (robot mode other than running).
+    NotRunning,
+    /// The streaming program is not playing (stopped, paused, or never
+    /// started: for example a robot not in remote control).
+    ProgramNotPlaying,
+    /// The connection to the controller closed or failed.
+    ConnectionLost,
+    /// No data came from the controller for several control periods.
+    StalledStream,
+    /// A command failed the driver's safety check before it was sent.
+    CommandRejected,
+}
+
+impl std::fmt::Display for StopReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            StopReason::ProtectiveStop => "protective stop",
+            StopReason::EmergencyStop => "emergency stop",
+            StopReason::SafeguardStop => "safeguard stop",
+            StopReason::SafetyFault => "safety fault",
+            StopReason::NotRunning => "the arm is not running",
+            StopReason::ProgramNotPlaying => "the streaming program is not playing",
+            StopReason::ConnectionLost => "connection to the controller lost",
+            StopReason::StalledStream => "no data from the controller",
+            StopReason::CommandRejected => "a command failed the safety check",
+        })
+    }
 }
 
 /// A robot cell that can be observed and commanded one control cycle at a
