@@ -11,12 +11,11 @@
 //! alone (no clock, fixed number format).
 
 use crate::error::DrawError;
-use crate::path::{EventKind, Stage, ToolPath};
-use crate::svg::{Attrs, Svg, num, points};
+use crate::path::{self, EventKind, Stage, ToolPath};
+use crate::svg::{Attrs, Svg, num};
+use crate::view::{SCALE, Span, View, grid, label};
 use packwright_interface::scene::CellScene;
 
-/// Pixels per metre (both views).
-pub const SCALE: f64 = 300.0;
 const MARGIN: f64 = 48.0;
 const TITLE: f64 = 30.0;
 const GAP: f64 = 44.0;
@@ -122,71 +121,6 @@ impl Picture {
             marks: Vec::new(),
             path: None,
         }
-    }
-}
-
-/// A closed range of metres.
-#[derive(Debug, Clone, Copy)]
-struct Span {
-    lo: f64,
-    hi: f64,
-}
-
-impl Span {
-    fn empty() -> Span {
-        Span {
-            lo: f64::INFINITY,
-            hi: f64::NEG_INFINITY,
-        }
-    }
-    fn add(&mut self, v: f64) {
-        self.lo = self.lo.min(v);
-        self.hi = self.hi.max(v);
-    }
-    fn len(&self) -> f64 {
-        (self.hi - self.lo).max(0.0)
-    }
-    fn grown(self, by: f64) -> Span {
-        Span {
-            lo: self.lo - by,
-            hi: self.hi + by,
-        }
-    }
-}
-
-/// A view's mapping from metres to pixels: horizontal axis `h` (0 = x,
-/// 1 = y), vertical axis `v` (1 = y, 2 = z), the panel's origin.
-#[derive(Debug, Clone, Copy)]
-struct View {
-    h: usize,
-    v: usize,
-    hs: Span,
-    vs: Span,
-    left: f64,
-    top: f64,
-}
-
-impl View {
-    fn px(&self, p: [f64; 3]) -> (f64, f64) {
-        (
-            self.left + (p[self.h] - self.hs.lo) * SCALE,
-            self.top + (self.vs.hi - p[self.v]) * SCALE,
-        )
-    }
-    fn width(&self) -> f64 {
-        self.hs.len() * SCALE
-    }
-    fn height(&self) -> f64 {
-        self.vs.len() * SCALE
-    }
-    /// A rectangle of metres (centre, sizes along h and v) in pixels.
-    fn rect(&self, centre: [f64; 3], dh: f64, dv: f64) -> Attrs {
-        let (x, y) = self.px(centre);
-        Attrs::new()
-            .n("x", x - dh * SCALE / 2.0)
-            .n("y", y - dv * SCALE / 2.0)
-            .n("width", dh * SCALE)
-            .n("height", dv * SCALE)
     }
 }
 
@@ -390,8 +324,8 @@ pub fn picture(picture: &Picture) -> Result<String, DrawError> {
     draw_top(&mut svg, picture, &top);
     draw_side(&mut svg, picture, &side);
     if let Some(path) = &picture.path {
-        draw_path(&mut svg, path, &top, "top");
-        draw_path(&mut svg, path, &side, "side");
+        path::draw(&mut svg, path, &top, "top");
+        path::draw(&mut svg, path, &side, "side");
     }
     let mut y = side.top + side.height() + GAP;
     for (text, colour) in legend {
@@ -407,77 +341,6 @@ pub fn picture(picture: &Picture) -> Result<String, DrawError> {
         y += LINE;
     }
     Ok(svg.finish())
-}
-
-/// Grid lines every 0.1 m, labelled every 0.5 m, and the panel's frame.
-fn grid(svg: &mut Svg, view: &View) {
-    svg.group(
-        Attrs::new()
-            .s("class", "grid")
-            .s("stroke", "#eeeeee")
-            .n("stroke-width", 1.0),
-    );
-    let lines = |span: Span| {
-        let first = (span.lo * 10.0).ceil() as i64;
-        let last = (span.hi * 10.0).floor() as i64;
-        (first..=last).map(|k| k as f64 / 10.0)
-    };
-    let (x0, y0) = (view.left, view.top);
-    let (x1, y1) = (view.left + view.width(), view.top + view.height());
-    let mut labels = Vec::new();
-    for h in lines(view.hs) {
-        let x = view.left + (h - view.hs.lo) * SCALE;
-        svg.el(
-            "line",
-            Attrs::new().n("x1", x).n("y1", y0).n("x2", x).n("y2", y1),
-        );
-        if (h * 10.0).round() as i64 % 5 == 0 {
-            labels.push((x, y1 + 13.0, "middle", h));
-        }
-    }
-    for v in lines(view.vs) {
-        let y = view.top + (view.vs.hi - v) * SCALE;
-        svg.el(
-            "line",
-            Attrs::new().n("x1", x0).n("y1", y).n("x2", x1).n("y2", y),
-        );
-        if (v * 10.0).round() as i64 % 5 == 0 {
-            labels.push((x0 - 4.0, y + 4.0, "end", v));
-        }
-    }
-    svg.el(
-        "rect",
-        Attrs::new()
-            .n("x", x0)
-            .n("y", y0)
-            .n("width", view.width())
-            .n("height", view.height())
-            .s("fill", "none")
-            .s("stroke", "#bbbbbb"),
-    );
-    svg.end();
-    for (x, y, anchor, v) in labels {
-        svg.text(
-            Attrs::new()
-                .n("x", x)
-                .n("y", y)
-                .n("font-size", 10.0)
-                .s("text-anchor", anchor)
-                .s("fill", "#777777"),
-            &format!("{} m", num(v)),
-        );
-    }
-}
-
-fn label(svg: &mut Svg, (x, y): (f64, f64), size: f64, anchor: &str, text: &str) {
-    svg.text(
-        Attrs::new()
-            .n("x", x)
-            .n("y", y)
-            .n("font-size", size)
-            .s("text-anchor", anchor),
-        text,
-    );
 }
 
 fn draw_top(svg: &mut Svg, picture: &Picture, view: &View) {
@@ -860,152 +723,6 @@ fn draw_side(svg: &mut Svg, picture: &Picture, view: &View) {
                 .s("class", "product-side"),
         );
     }
-}
-
-fn draw_path(svg: &mut Svg, path: &ToolPath, view: &View, which: &str) {
-    svg.group(Attrs::new().s("class", &format!("path path-{which}")));
-    let mut run: Vec<(f64, f64)> = Vec::new();
-    let mut stage: Option<Stage> = None;
-    let flush = |svg: &mut Svg, run: &[(f64, f64)], stage: Stage| {
-        if run.len() > 1 {
-            svg.el(
-                "polyline",
-                Attrs::new()
-                    .s("class", stage.name())
-                    .s("points", &points(run))
-                    .s("fill", "none")
-                    .s("stroke", stage.colour())
-                    .n("stroke-width", 1.6),
-            );
-        }
-    };
-    for (p, st) in &path.points {
-        let xy = view.px(*p);
-        match stage {
-            Some(s) if s == *st => run.push(xy),
-            Some(s) => {
-                flush(svg, &run, s);
-                // Join the runs at the point where the stage changed.
-                let joint = run.last().copied();
-                run.clear();
-                run.extend(joint);
-                run.push(xy);
-                stage = Some(*st);
-            }
-            None => {
-                run.push(xy);
-                stage = Some(*st);
-            }
-        }
-    }
-    if let Some(s) = stage {
-        flush(svg, &run, s);
-    }
-    if let Some((start, _)) = path.points.first() {
-        let (x, y) = view.px(*start);
-        svg.el(
-            "rect",
-            Attrs::new()
-                .s("class", "start")
-                .n("x", x - 4.0)
-                .n("y", y - 4.0)
-                .n("width", 8.0)
-                .n("height", 8.0)
-                .s("fill", "black"),
-        );
-    }
-    for e in &path.events {
-        let (x, y) = view.px(e.at);
-        match &e.kind {
-            EventKind::SubGoal(n) => {
-                svg.el(
-                    "circle",
-                    Attrs::new()
-                        .s("class", "subgoal")
-                        .n("cx", x)
-                        .n("cy", y)
-                        .n("r", 3.0)
-                        .s("fill", "white")
-                        .s("stroke", "black"),
-                );
-                svg.text(
-                    Attrs::new()
-                        .n("x", x + 4.0)
-                        .n("y", y - 4.0)
-                        .n("font-size", 9.0),
-                    &n.to_string(),
-                );
-            }
-            EventKind::Pick | EventKind::Release => {
-                let (class, fill) = if e.kind == EventKind::Pick {
-                    ("pick", "#2ca02c")
-                } else {
-                    ("release", "#9467bd")
-                };
-                svg.el(
-                    "circle",
-                    Attrs::new()
-                        .s("class", class)
-                        .n("cx", x)
-                        .n("cy", y)
-                        .n("r", 2.0)
-                        .s("fill", fill),
-                );
-            }
-            EventKind::Fallback(why) => {
-                svg.group(Attrs::new().s("class", "fallback"));
-                svg.title(&format!("fallback: {why}"));
-                svg.el(
-                    "path",
-                    Attrs::new()
-                        .s(
-                            "d",
-                            &format!(
-                                "M {} {} L {} {} L {} {} L {} {} Z",
-                                num(x),
-                                num(y - 7.0),
-                                num(x + 7.0),
-                                num(y),
-                                num(x),
-                                num(y + 7.0),
-                                num(x - 7.0),
-                                num(y)
-                            ),
-                        )
-                        .s("fill", "none")
-                        .s("stroke", "#ff7f0e")
-                        .n("stroke-width", 2.0),
-                );
-                svg.end();
-            }
-            EventKind::Failure(why) => {
-                svg.group(Attrs::new().s("class", "failure"));
-                svg.title(&format!("failure: {why}"));
-                svg.el(
-                    "path",
-                    Attrs::new()
-                        .s(
-                            "d",
-                            &format!(
-                                "M {} {} L {} {} M {} {} L {} {}",
-                                num(x - 8.0),
-                                num(y - 8.0),
-                                num(x + 8.0),
-                                num(y + 8.0),
-                                num(x - 8.0),
-                                num(y + 8.0),
-                                num(x + 8.0),
-                                num(y - 8.0)
-                            ),
-                        )
-                        .s("stroke", RED)
-                        .n("stroke-width", 3.0),
-                );
-                svg.end();
-            }
-        }
-    }
-    svg.end();
 }
 
 /// The legend's lines (text, colour): what the symbols mean, the path's

@@ -22,11 +22,13 @@ pub mod charts;
 mod error;
 pub mod path;
 pub mod svg;
+mod view;
 
 pub use cell::{Mark, Picture, Place, Product, ProductState, Reach, UR10_REACH, picture};
 pub use charts::{Latencies, ProductTimes, SuccessRate};
 pub use error::DrawError;
 pub use path::{Event, EventKind, Sample, Stage, ToolPath};
+pub use view::SCALE;
 
 #[cfg(test)]
 mod tests;

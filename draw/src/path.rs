@@ -7,6 +7,11 @@
 //! planner. Sub-goals that a blend passes through without stopping leave
 //! no trace there; the numbered markers are the arm's rests.
 
+use crate::svg::{Attrs, Svg, num, points};
+use crate::view::View;
+
+const RED: &str = "#d62728";
+
 /// What the arm is doing, from the suction's state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stage {
@@ -146,6 +151,154 @@ impl ToolPath {
     pub fn end(&self) -> Option<[f64; 3]> {
         self.points.last().map(|(p, _)| *p)
     }
+}
+
+/// Draws `path` in `view` (`which`: `top` or `side`, its class): one
+/// polyline per run of a stage, the start, and every event.
+pub(crate) fn draw(svg: &mut Svg, path: &ToolPath, view: &View, which: &str) {
+    svg.group(Attrs::new().s("class", &format!("path path-{which}")));
+    let mut run: Vec<(f64, f64)> = Vec::new();
+    let mut stage: Option<Stage> = None;
+    let flush = |svg: &mut Svg, run: &[(f64, f64)], stage: Stage| {
+        if run.len() > 1 {
+            svg.el(
+                "polyline",
+                Attrs::new()
+                    .s("class", stage.name())
+                    .s("points", &points(run))
+                    .s("fill", "none")
+                    .s("stroke", stage.colour())
+                    .n("stroke-width", 1.6),
+            );
+        }
+    };
+    for (p, st) in &path.points {
+        let xy = view.px(*p);
+        match stage {
+            Some(s) if s == *st => run.push(xy),
+            Some(s) => {
+                flush(svg, &run, s);
+                // Join the runs at the point where the stage changed.
+                let joint = run.last().copied();
+                run.clear();
+                run.extend(joint);
+                run.push(xy);
+                stage = Some(*st);
+            }
+            None => {
+                run.push(xy);
+                stage = Some(*st);
+            }
+        }
+    }
+    if let Some(s) = stage {
+        flush(svg, &run, s);
+    }
+    if let Some((start, _)) = path.points.first() {
+        let (x, y) = view.px(*start);
+        svg.el(
+            "rect",
+            Attrs::new()
+                .s("class", "start")
+                .n("x", x - 4.0)
+                .n("y", y - 4.0)
+                .n("width", 8.0)
+                .n("height", 8.0)
+                .s("fill", "black"),
+        );
+    }
+    for e in &path.events {
+        let (x, y) = view.px(e.at);
+        match &e.kind {
+            EventKind::SubGoal(n) => {
+                svg.el(
+                    "circle",
+                    Attrs::new()
+                        .s("class", "subgoal")
+                        .n("cx", x)
+                        .n("cy", y)
+                        .n("r", 3.0)
+                        .s("fill", "white")
+                        .s("stroke", "black"),
+                );
+                svg.text(
+                    Attrs::new()
+                        .n("x", x + 4.0)
+                        .n("y", y - 4.0)
+                        .n("font-size", 9.0),
+                    &n.to_string(),
+                );
+            }
+            EventKind::Pick | EventKind::Release => {
+                let (class, fill) = if e.kind == EventKind::Pick {
+                    ("pick", "#2ca02c")
+                } else {
+                    ("release", "#9467bd")
+                };
+                svg.el(
+                    "circle",
+                    Attrs::new()
+                        .s("class", class)
+                        .n("cx", x)
+                        .n("cy", y)
+                        .n("r", 2.0)
+                        .s("fill", fill),
+                );
+            }
+            EventKind::Fallback(why) => {
+                svg.group(Attrs::new().s("class", "fallback"));
+                svg.title(&format!("fallback: {why}"));
+                svg.el(
+                    "path",
+                    Attrs::new()
+                        .s(
+                            "d",
+                            &format!(
+                                "M {} {} L {} {} L {} {} L {} {} Z",
+                                num(x),
+                                num(y - 7.0),
+                                num(x + 7.0),
+                                num(y),
+                                num(x),
+                                num(y + 7.0),
+                                num(x - 7.0),
+                                num(y)
+                            ),
+                        )
+                        .s("fill", "none")
+                        .s("stroke", "#ff7f0e")
+                        .n("stroke-width", 2.0),
+                );
+                svg.end();
+            }
+            EventKind::Failure(why) => {
+                svg.group(Attrs::new().s("class", "failure"));
+                svg.title(&format!("failure: {why}"));
+                svg.el(
+                    "path",
+                    Attrs::new()
+                        .s(
+                            "d",
+                            &format!(
+                                "M {} {} L {} {} M {} {} L {} {}",
+                                num(x - 8.0),
+                                num(y - 8.0),
+                                num(x + 8.0),
+                                num(y + 8.0),
+                                num(x - 8.0),
+                                num(y + 8.0),
+                                num(x + 8.0),
+                                num(y - 8.0)
+                            ),
+                        )
+                        .s("stroke", RED)
+                        .n("stroke-width", 3.0),
+                );
+                svg.end();
+            }
+        }
+    }
+    svg.end();
 }
 
 fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
