@@ -71,6 +71,11 @@ pub enum UrError {
     /// said about remote control, when it could be asked.
     #[error("{}", not_started(*.remote))]
     ProgramNotStarted { remote: Option<bool> },
+    /// A program is already playing: the driver does not replace it.
+    #[error(
+        "a program is already running on the robot: stop it (pendant, or the dashboard's `stop`) before streaming"
+    )]
+    ProgramRunning,
     /// The robot is not ready to move (its state when checked).
     #[error("the robot is not ready: {0}")]
     NotReady(Fault),

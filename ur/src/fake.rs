@@ -387,18 +387,25 @@ impl FakeController {
         };
         let (r, s, d) = (listen()?, listen()?, listen()?);
         let (rtde, secondary, dashboard) = (r.local_addr()?, s.local_addr()?, d.local_addr()?);
+        // One thread per listener, one more per connection (a controller
+        // serves several clients at once); all end when the fake drops.
         let spawn = |l: TcpListener, serve: fn(&Inner, TcpStream)| {
             let inner = Arc::clone(&inner);
             std::thread::spawn(move || {
+                let mut connections = Vec::new();
                 while !inner.stopping() {
                     match l.accept() {
                         Ok((stream, _)) => {
                             if stream.set_nonblocking(false).is_ok() {
-                                serve(&inner, stream);
+                                let inner = Arc::clone(&inner);
+                                connections.push(std::thread::spawn(move || serve(&inner, stream)));
                             }
                         }
                         Err(_) => std::thread::sleep(Duration::from_millis(1)),
                     }
+                }
+                for c in connections {
+                    let _ = c.join();
                 }
             })
         };

@@ -145,8 +145,8 @@ impl std::fmt::Debug for Ur10World {
 impl Ur10World {
     /// Connects, checks the robot can move, starts the streaming program.
     /// Errors: an unreachable host, a refused recipe, a robot not ready
-    /// (protective stop, not running), a program that does not play (not
-    /// in remote control).
+    /// (protective stop, not running), a program already playing, a
+    /// program that does not play (not in remote control).
     pub fn connect(
         settings: &Settings,
         mut products: Box<dyn ProductSource>,
@@ -165,6 +165,11 @@ impl Ur10World {
         if let Err(f @ (Fault::Safety(_) | Fault::Robot(_))) = check_state(&state) {
             let _ = client.pause();
             return Err(UrError::NotReady(f));
+        }
+        // Only a program that starts after ours was sent is ours.
+        if state.runtime_state == RuntimeState::Playing {
+            let _ = client.pause();
+            return Err(UrError::ProgramRunning);
         }
         let mut sequence = 1;
         let hold = |client: &mut Client, sequence: &mut i32, q: &Joints| {
@@ -305,6 +310,19 @@ impl Drop for Ur10World {
     fn drop(&mut self) {
         self.shutdown();
     }
+}
+
+/// The controller's version and one state of the robot, read without
+/// taking control: an output recipe only, no input recipe, no program
+/// (for dry runs). The robot is not checked; see [`check_state`].
+pub fn read_state(address: &RobotAddress) -> Result<(ControllerVersion, RobotState), UrError> {
+    let mut client = Client::connect(&address.rtde_addr())?;
+    let controller = client.controller();
+    client.setup_state(controller.frequency())?;
+    client.start()?;
+    let state = client.receive_state(Duration::from_millis(500))?;
+    let _ = client.pause();
+    Ok((controller, state))
 }
 
 /// Sends the program text to the secondary interface.

@@ -451,3 +451,26 @@ fn a_real_controller_when_ur_robot_host_is_set() {
     }
     assert_eq!(world.close(), None);
 }
+
+#[test]
+fn the_state_is_read_without_taking_control() {
+    let fake = FakeController::start(FakeConfig::default()).unwrap();
+    let address = RobotAddress::parse(&fake.url()).unwrap();
+    let (controller, state) = packwright_ur::read_state(&address).unwrap();
+    assert_eq!(controller.major, 5);
+    assert_eq!(state.actual_q, FakeConfig::default().start);
+    assert_eq!(state.runtime_state, RuntimeState::Stopped);
+    let record = fake.record();
+    assert!(record.scripts.is_empty() && record.inputs == 0);
+}
+
+#[test]
+fn a_program_already_playing_is_not_replaced() {
+    let fake = FakeController::start(FakeConfig::default()).unwrap();
+    let world = connect(&fake);
+    // A second driver while the first one's program plays.
+    let e = Ur10World::connect(&settings(&fake), Box::new(NoProducts)).unwrap_err();
+    assert!(matches!(e, UrError::ProgramRunning), "{e}");
+    assert_eq!(fake.record().scripts.len(), 1);
+    assert_eq!(world.close(), None);
+}
