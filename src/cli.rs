@@ -42,6 +42,21 @@ pub enum Command {
     Compile(CompileArgs),
     /// Summarise a directory of compiled artifacts.
     Show(ShowArgs),
+    /// Draw a cell as an SVG picture, in top and side view at true scale.
+    ///
+    /// Shows the robot base and its reachable annulus (0.20 to 1.30 m for
+    /// the UR10), the pending area, the boxes and their slots (name and
+    /// label), and, with `--inventory`, `--order` or `--scenario`, the
+    /// products at their positions (footprint and name), the order's
+    /// assignment as arrows, and a scenario's worker-packed and missing
+    /// products. Diagnostics that `check` finds are drawn where they are
+    /// (a slot outside its box circled in red) and listed under the
+    /// picture and on stderr; the picture is still written, and the exit
+    /// code is 1. A scenario needs files without diagnostics.
+    ///
+    /// Example: `packwright draw orders/customers/hampton_deli.pack --order
+    /// deli_crate -o deli.svg`. Without `-o` the SVG goes to stdout.
+    Draw(DrawArgs),
     /// Pack an order in the physical simulator and report each product.
     ///
     /// The order (or a scenario: products a worker already packed, missing
@@ -144,6 +159,33 @@ pub struct ShowArgs {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct DrawArgs {
+    /// The .pack files that define the cell (files they `use` are read
+    /// too).
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+    /// The cell to draw (default: the only cell the files define).
+    #[arg(long, value_name = "NAME")]
+    pub cell: Option<String>,
+    /// Draw an inventory's products at their positions, in its cell.
+    #[arg(long, value_name = "NAME", conflicts_with_all = ["cell", "order", "scenario"])]
+    pub inventory: Option<String>,
+    /// Draw an order: its inventory's products and its assignment as
+    /// arrows, in its cell.
+    #[arg(long, value_name = "NAME", conflicts_with_all = ["cell", "scenario"])]
+    pub order: Option<String>,
+    /// Draw a scenario (or a suite's case, such as `case1_3of5/007`): the
+    /// jittered positions, the products a worker packed in their slots,
+    /// the missing ones dashed.
+    #[arg(long, value_name = "NAME", conflicts_with = "cell")]
+    pub scenario: Option<String>,
+    /// The SVG file to write (atomically); its path is printed on
+    /// stdout. Without it, the SVG goes to stdout.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
 }
 
 fn planner(s: &str) -> Result<PlannerKind, String> {
@@ -258,6 +300,14 @@ pub struct EvalArgs {
     /// Also write the table as Markdown to FILE.
     #[arg(long, value_name = "FILE")]
     pub markdown: Option<PathBuf>,
+    /// Also write SVG charts into DIR (created if needed; files of the
+    /// same names replaced): success_rate.svg (each suite and planner's
+    /// success rate with its Wilson 95% interval), latency.svg (planning
+    /// time per decision, per sub-goal and per sub-goal + action, as
+    /// distributions on a log axis) and execution_time.svg (each packed
+    /// product's simulated execution time against its lower bound).
+    #[arg(long, value_name = "DIR")]
+    pub plots: Option<PathBuf>,
     /// Print every figure as JSON instead of the table.
     #[arg(long)]
     pub json: bool,

@@ -52,6 +52,7 @@ pub fn run(cli: cli::Cli) -> anyhow::Result<Exit> {
         cli::Command::Check(args) => commands::check::run(&args),
         cli::Command::Compile(args) => commands::compile::run(&args),
         cli::Command::Show(args) => commands::show::run(&args),
+        cli::Command::Draw(args) => commands::draw::run(&args),
         cli::Command::Execute(args) => commands::execute::run(&args),
         cli::Command::Demonstrate(args) => commands::demonstrate::run(&args),
         cli::Command::Train(args) => commands::train::run(&args),

@@ -463,12 +463,16 @@ fn draw_top(svg: &mut Svg, picture: &Picture, view: &View) {
                 .s("stroke", "#1a3d7c")
                 .n("stroke-width", 1.5),
         );
-        label(
-            svg,
-            (x, y + 15.0),
-            10.0,
-            "middle",
-            &format!("{} ({})", s.name, i + 1),
+        // The name under the slot, its label (index + 1) at its upper right:
+        // slots 10 cm apart are 30 px apart.
+        label(svg, (x, y + 14.0), 9.0, "middle", &s.name);
+        svg.text(
+            Attrs::new()
+                .n("x", x + 5.0)
+                .n("y", y - 4.0)
+                .n("font-size", 8.0)
+                .s("fill", "#1a3d7c"),
+            &(i + 1).to_string(),
         );
         svg.end();
     }
@@ -729,7 +733,7 @@ fn draw_side(svg: &mut Svg, picture: &Picture, view: &View) {
 /// stages and events, then every diagnostic.
 fn legend_lines(picture: &Picture) -> Vec<(String, &'static str)> {
     let mut lines = vec![(
-        "products: orange waiting, green packed by a worker, dashed missing; arrows: the order's assignment; slots: name (label)".to_owned(),
+        "products: orange waiting, green packed by a worker, dashed missing; arrows: the order's assignment; slots: name below, label at the upper right".to_owned(),
         "#333333",
     )];
     if let Some(path) = &picture.path {

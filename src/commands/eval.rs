@@ -4,6 +4,7 @@
 use crate::Exit;
 use crate::cli::EvalArgs;
 use crate::fsio::{FsLoader, write_file_atomically};
+use anyhow::Context;
 use anyhow::bail;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use packwright_interface::PlannerKind;
@@ -13,6 +14,7 @@ use packwright_pipeline::models::{choose_planner, taught};
 use packwright_pipeline::reach::RobotWorkspace;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::path::Path;
 
 /// A suite evaluated without the learned planner, and why.
 #[derive(Debug, Serialize)]
@@ -72,6 +74,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
     }
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
+    let mut all_results = Vec::new();
     for suite in suites {
         let Some(first) = suite.cases.first() else {
             continue;
@@ -143,8 +146,12 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
             let taught = nets.as_ref().map(|n| taught(n, &cell));
             rows.push(Row::of(&suite.name, &cell, taught, p, &results));
         }
+        all_results.extend(results);
     }
     let table = markdown(&rows);
+    if let Some(dir) = &args.plots {
+        write_plots(dir, &rows, &all_results)?;
+    }
     if let Some(path) = &args.markdown {
         write_file_atomically(path, table.as_bytes())?;
     }
@@ -168,4 +175,64 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
         out!("{table}");
     }
     Ok(Exit::Success)
+}
+
+/// `--plots DIR`: the charts of this run (`packwright_draw::charts`),
+/// each file written atomically; planners in the rows' order.
+fn write_plots(dir: &Path, rows: &[Row], results: &[CaseResult]) -> anyhow::Result<()> {
+    use packwright_draw::charts::{self, Latencies, ProductTimes, SuccessRate};
+    let rates: Vec<SuccessRate> = rows
+        .iter()
+        .filter_map(|r| {
+            let sr = r.sr?;
+            Some(SuccessRate {
+                suite: r.suite.clone(),
+                planner: r.planner.to_string(),
+                rate: sr.rate,
+                low: sr.ci95.0,
+                high: sr.ci95.1,
+                n: r.scenarios,
+            })
+        })
+        .collect();
+    let mut planners: Vec<PlannerKind> = Vec::new();
+    for r in rows {
+        if !planners.contains(&r.planner) {
+            planners.push(r.planner);
+        }
+    }
+    let runs = |p: PlannerKind| {
+        results
+            .iter()
+            .flat_map(move |c| c.runs.iter().filter(move |(k, _)| *k == p))
+            .map(|(_, run)| run)
+    };
+    let latencies: Vec<Latencies> = planners
+        .iter()
+        .map(|&p| Latencies {
+            planner: p.to_string(),
+            decision_us: runs(p).flat_map(|r| r.timing.decision_us.clone()).collect(),
+            subgoal_us: runs(p).flat_map(|r| r.timing.subgoal_us.clone()).collect(),
+            network_us: runs(p).flat_map(|r| r.timing.network_us.clone()).collect(),
+        })
+        .collect();
+    let times: Vec<ProductTimes> = planners
+        .iter()
+        .map(|&p| ProductTimes {
+            planner: p.to_string(),
+            execution_s: runs(p).flat_map(|r| r.execution_s.clone()).collect(),
+            bound_s: runs(p).flat_map(|r| r.bound_s.clone()).collect(),
+        })
+        .collect();
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    for (name, svg) in [
+        ("success_rate.svg", charts::success_rates(&rates)?),
+        ("latency.svg", charts::latencies(&latencies)?),
+        ("execution_time.svg", charts::execution_times(&times)?),
+    ] {
+        let path = dir.join(name);
+        write_file_atomically(&path, svg.as_bytes())?;
+        errln!("wrote {}", path.display());
+    }
+    Ok(())
 }

@@ -3,6 +3,7 @@
 pub mod check;
 pub mod compile;
 pub mod demonstrate;
+pub mod draw;
 pub mod eval;
 pub mod execute;
 pub mod fmt;

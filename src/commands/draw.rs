@@ -1,0 +1,437 @@
+//! `packwright draw`: a cell (with an inventory, an order or a scenario)
+//! as an SVG picture, diagnostics drawn where they are
+//! (`packwright_draw` does the drawing; this is the edge: files in,
+//! diagnostics mapped to places, the picture out).
+
+use crate::Exit;
+use crate::cli::DrawArgs;
+use crate::fsio::{FsLoader, write_file_atomically};
+use anyhow::bail;
+use nalgebra::Isometry3;
+use packwright_compiler::emit::cell_record;
+use packwright_compiler::expand::{self, Setup};
+use packwright_compiler::model::{Model, RobotModel};
+use packwright_compiler::{Error, Failed, Loc, load, resolve, validate, workspace};
+use packwright_draw::{
+    Event, EventKind, Mark, Picture, Place, Product, ProductState, Sample, ToolPath, UR10_REACH,
+};
+use packwright_interface::outcome::{Report, Stage};
+use packwright_interface::{Contact, Joints, Observation, World, WorldError};
+use packwright_kinematics::Arm;
+use packwright_pipeline::episode::scene_of;
+use packwright_pipeline::reach::RobotWorkspace;
+
+/// What the command line asked to draw.
+enum Subject {
+    Cell(usize),
+    Inventory(usize),
+    Setup {
+        title: String,
+        order: Option<usize>,
+        setup: Setup,
+    },
+}
+
+pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
+    let loaded = load::load(&FsLoader, &args.files);
+    if !loaded.errors.is_empty() {
+        return Ok(refuse(loaded.sources, loaded.errors));
+    }
+    let (model, errors) = resolve::resolve(&FsLoader, &loaded.sources, &loaded.files);
+    if !errors.is_empty() {
+        return Ok(refuse(loaded.sources, errors));
+    }
+    // Geometry and reach are drawn, not refused: the picture shows them.
+    let mut diagnostics = validate::validate(&model);
+    if diagnostics.is_empty() {
+        diagnostics = workspace::check(&model, &RobotWorkspace::new());
+    }
+    let subject = if let Some(name) = &args.scenario {
+        if !diagnostics.is_empty() {
+            errln!("a scenario is drawn only from files without diagnostics:");
+            return Ok(refuse(loaded.sources, diagnostics));
+        }
+        let expanded = match expand::expand(&model) {
+            Ok(x) => x,
+            Err(errors) => return Ok(refuse(loaded.sources, errors)),
+        };
+        let found = expanded.suites.iter().find_map(|suite| {
+            let case = suite.cases.iter().find(|c| &c.name == name)?;
+            Some((suite.order, case.setup.clone()))
+        });
+        let Some((order, setup)) = found else {
+            let known: Vec<&str> = expanded
+                .suites
+                .iter()
+                .filter_map(|s| s.cases.first().map(|c| c.name.as_str()))
+                .collect();
+            bail!(
+                "no scenario `{name}`; scenarios are named like: {}",
+                known.join(", ")
+            );
+        };
+        Subject::Setup {
+            title: format!("scenario {name}"),
+            order,
+            setup,
+        }
+    } else if let Some(name) = &args.order {
+        let Some(o) = model.orders.iter().position(|o| &o.name == name) else {
+            bail!(
+                "no order `{name}`; known orders: {}",
+                names(model.orders.iter().map(|o| &o.name))
+            );
+        };
+        let order = &model.orders[o];
+        let inv = &model.inventories[order.inventory];
+        Subject::Setup {
+            title: format!("order {name}"),
+            order: Some(o),
+            setup: Setup {
+                inventory: order.inventory,
+                assignment: order.assignment.iter().map(|a| (a.entry, a.slot)).collect(),
+                human_packed: Vec::new(),
+                missing: Vec::new(),
+                positions: inv.entries.iter().map(|e| e.at).collect(),
+            },
+        }
+    } else if let Some(name) = &args.inventory {
+        let Some(i) = model.inventories.iter().position(|i| &i.name == name) else {
+            bail!(
+                "no inventory `{name}`; known inventories: {}",
+                names(model.inventories.iter().map(|i| &i.name))
+            );
+        };
+        Subject::Inventory(i)
+    } else if let Some(name) = &args.cell {
+        let Some(c) = model.cells.iter().position(|c| &c.name == name) else {
+            bail!(
+                "no cell `{name}`; known cells: {}",
+                names(model.cells.iter().map(|c| &c.name))
+            );
+        };
+        Subject::Cell(c)
+    } else if model.cells.len() == 1 {
+        Subject::Cell(0)
+    } else {
+        bail!(
+            "the files define {} cells: name one with --cell NAME ({})",
+            model.cells.len(),
+            names(model.cells.iter().map(|c| &c.name))
+        );
+    };
+    let picture = picture_of(&model, &subject, &diagnostics);
+    if let Subject::Cell(c) = subject {
+        let invs: Vec<&String> = model
+            .inventories
+            .iter()
+            .filter(|i| i.cell == c)
+            .map(|i| &i.name)
+            .collect();
+        if !invs.is_empty() {
+            errln!(
+                "note: --inventory NAME draws the products of one of {}",
+                names(invs.into_iter())
+            );
+        }
+    }
+    let svg = packwright_draw::picture(&picture)?;
+    match &args.output {
+        Some(path) => {
+            write_file_atomically(path, svg.as_bytes())?;
+            outln!("{}", path.display());
+        }
+        None => out!("{svg}"),
+    }
+    if diagnostics.is_empty() {
+        return Ok(Exit::Success);
+    }
+    let failed = failed(loaded.sources, diagnostics);
+    err!("{}", failed.render());
+    let drawn = picture.marks.len();
+    errln!(
+        "\n{} diagnostic{} ({drawn} in the picture)",
+        failed.errors.len(),
+        if failed.errors.len() == 1 { "" } else { "s" }
+    );
+    Ok(Exit::Diagnostics)
+}
+
+fn names<'a>(names: impl Iterator<Item = &'a String>) -> String {
+    names.map(String::as_str).collect::<Vec<_>>().join(", ")
+}
+
+fn failed(sources: packwright_compiler::SourceMap, mut errors: Vec<Error>) -> Failed {
+    errors.sort_by_key(|e| e.at());
+    Failed { sources, errors }
+}
+
+fn refuse(sources: packwright_compiler::SourceMap, errors: Vec<Error>) -> Exit {
+    super::report_failure(&failed(sources, errors), false)
+}
+
+/// The picture of `subject`, with the diagnostics that belong to it.
+fn picture_of(model: &Model, subject: &Subject, diagnostics: &[Error]) -> Picture {
+    let (cell, inventory, order, setup, title) = match subject {
+        Subject::Cell(c) => (*c, None, None, None, String::new()),
+        Subject::Inventory(i) => (
+            model.inventories[*i].cell,
+            Some(*i),
+            None,
+            None,
+            format!("inventory {}", model.inventories[*i].name),
+        ),
+        Subject::Setup {
+            title,
+            order,
+            setup,
+        } => (
+            model.inventories[setup.inventory].cell,
+            Some(setup.inventory),
+            *order,
+            Some(setup),
+            title.clone(),
+        ),
+    };
+    let c = &model.cells[cell];
+    let title = if title.is_empty() {
+        format!("cell {}", c.name)
+    } else {
+        format!("{title} (cell {})", c.name)
+    };
+    let mut picture = Picture::new(title, scene_of(&cell_record(c)));
+    if c.robot == RobotModel::Ur10 {
+        picture.reach = Some(UR10_REACH);
+    }
+    if let Some(i) = inventory {
+        let inv = &model.inventories[i];
+        for (e, entry) in inv.entries.iter().enumerate() {
+            let p = &model.products[entry.product];
+            let at = setup.map_or(entry.at, |s| {
+                s.positions.get(e).copied().unwrap_or(entry.at)
+            });
+            let slot = setup.and_then(|s| s.slot_of(e));
+            let (centre, state) = match (setup, slot) {
+                (Some(s), _) if s.missing.contains(&e) => {
+                    ([at[0], at[1], p.size[2] / 2.0], ProductState::Missing)
+                }
+                (Some(s), Some(slot)) if s.human_packed.contains(&e) => {
+                    let goal = c.slots[slot].at;
+                    (
+                        [goal[0], goal[1], p.size[2] / 2.0],
+                        ProductState::WorkerPacked,
+                    )
+                }
+                _ => ([at[0], at[1], p.size[2] / 2.0], ProductState::Waiting),
+            };
+            picture.products.push(Product {
+                name: p.name.clone(),
+                size: p.size,
+                centre,
+                state,
+            });
+        }
+    }
+    if let Some(s) = setup {
+        picture.assignment = s.assignment.clone();
+    }
+    picture.marks = diagnostics
+        .iter()
+        .filter_map(|e| mark(model, cell, inventory, order, e))
+        .collect();
+    picture
+}
+
+fn within(inner: Loc, outer: Loc) -> bool {
+    inner.file == outer.file
+        && inner.span.start >= outer.span.start
+        && inner.span.end <= outer.span.end
+}
+
+/// Where diagnostic `e` is drawn, if it belongs to the picture: on the
+/// slot, box, product or assignment it is reported at; an unreachable
+/// pose at its tool tip; else listed under the picture when it is in a
+/// file that defines what is drawn.
+fn mark(
+    model: &Model,
+    cell: usize,
+    inventory: Option<usize>,
+    order: Option<usize>,
+    e: &Error,
+) -> Option<Mark> {
+    let at = e.at()?;
+    let c = &model.cells[cell];
+    let inv = inventory.map(|i| &model.inventories[i]);
+    let ord = order.map(|o| &model.orders[o]);
+    let mut place = None;
+    if let Some(s) = c.slots.iter().position(|s| within(at, s.loc)) {
+        place = Some(Place::Slot(s));
+    } else if let Some(b) = c.boxes.iter().position(|b| within(at, b.loc)) {
+        place = Some(Place::Box(b));
+    } else if let Some(p) = inv.and_then(|inv| inv.entries.iter().position(|x| within(at, x.loc))) {
+        place = Some(Place::Product(p));
+    } else if let Some(a) = ord.and_then(|o| o.assignment.iter().find(|a| within(at, a.loc))) {
+        place = Some(Place::Slot(a.slot));
+    }
+    let ours = place.is_some()
+        || within(at, c.loc)
+        || inv.is_some_and(|i| within(at, i.loc))
+        || ord.is_some_and(|o| within(at, o.loc));
+    if let Error::Unreachable { tip, .. } = e
+        && ours
+    {
+        place = Some(Place::Point(*tip));
+    }
+    let files = [Some(c.loc), inv.map(|i| i.loc), ord.map(|o| o.loc)];
+    let place = match place {
+        Some(p) => p,
+        None if files.iter().flatten().any(|l| l.file == at.file) => Place::Cell,
+        None => return None,
+    };
+    Some(Mark {
+        place,
+        code: e.code().to_owned(),
+        message: e.to_string(),
+    })
+}
+
+/// A `World` that passes everything to `inner` and remembers, per control
+/// cycle, the commanded joints and the suction: what `execute --svg`
+/// draws (the same for any planner and any world).
+pub struct Recorder<'a, W: World> {
+    inner: &'a mut W,
+    commanded: Option<Joints>,
+    suction: bool,
+    /// (commanded joints, suction on, same command as the cycle before).
+    pub cycles: Vec<(Joints, bool, bool)>,
+}
+
+impl<'a, W: World> Recorder<'a, W> {
+    pub fn new(inner: &'a mut W) -> Recorder<'a, W> {
+        let observed = inner.observe();
+        Recorder {
+            commanded: Some(observed.joints),
+            suction: observed.suction,
+            inner,
+            cycles: Vec::new(),
+        }
+    }
+}
+
+impl<W: World> World for Recorder<'_, W> {
+    fn control_period(&self) -> f64 {
+        self.inner.control_period()
+    }
+    fn observe(&self) -> Observation {
+        self.inner.observe()
+    }
+    fn command(&mut self, joints: &Joints) -> Result<(), WorldError> {
+        self.inner.command(joints)?;
+        self.commanded = Some(*joints);
+        Ok(())
+    }
+    fn set_suction(&mut self, on: bool) -> Result<(), WorldError> {
+        self.inner.set_suction(on)?;
+        self.suction = on;
+        Ok(())
+    }
+    fn step(&mut self) -> Result<(), WorldError> {
+        self.inner.step()?;
+        if let Some(q) = self.commanded {
+            let resting = self.cycles.last().is_some_and(|(last, _, _)| *last == q);
+            self.cycles.push((q, self.suction, resting));
+        }
+        Ok(())
+    }
+    fn take_collisions(&mut self) -> Vec<Contact> {
+        self.inner.take_collisions()
+    }
+}
+
+/// The picture of a scenario or an order (`setup`) as `execute` ran it:
+/// the cell and its products at their start, the assignment, the tool
+/// path of `cycles` (forward kinematics of the commanded joints, coloured
+/// by the suction's stage), each fallback at the pick or release of its
+/// product and stage, and the first failure where the arm stopped.
+pub fn executed_picture(
+    model: &Model,
+    name: &str,
+    setup: &Setup,
+    arm: &Arm,
+    cycles: &[(Joints, bool, bool)],
+    report: &Report,
+) -> Picture {
+    let subject = Subject::Setup {
+        title: format!("{name}, planner {}", report.planner),
+        order: None,
+        setup: setup.clone(),
+    };
+    let mut picture = picture_of(model, &subject, &[]);
+    let b = picture.cell.base;
+    let base = Isometry3::translation(b[0], b[1], b[2]);
+    let suction = picture.cell.suction;
+    let samples: Vec<Sample> = cycles
+        .iter()
+        .map(|(q, on, resting)| {
+            let tip = arm.tool_tip(&base, q, suction);
+            Sample {
+                tip: [tip.x, tip.y, tip.z],
+                suction: *on,
+                resting: *resting,
+            }
+        })
+        .collect();
+    let mut path = ToolPath::from_samples(&samples);
+    // Each pick belongs to the product nearest the cup; its release
+    // follows it.
+    let mut handled: Vec<(String, [f64; 3], Option<[f64; 3]>)> = Vec::new();
+    for e in &path.events {
+        match e.kind {
+            EventKind::Pick => {
+                let nearest = picture
+                    .products
+                    .iter()
+                    .filter(|p| p.state == ProductState::Waiting)
+                    .min_by(|a, b| flat(a.centre, e.at).total_cmp(&flat(b.centre, e.at)));
+                if let Some(p) = nearest {
+                    handled.push((p.name.clone(), e.at, None));
+                }
+            }
+            EventKind::Release => {
+                if let Some(last) = handled.last_mut() {
+                    last.2 = Some(e.at);
+                }
+            }
+            _ => {}
+        }
+    }
+    for f in &report.fallbacks {
+        let at = handled
+            .iter()
+            .find(|(p, _, _)| *p == f.product)
+            .and_then(|(_, pick, release)| match f.stage {
+                Stage::Picking => Some(*pick),
+                Stage::Placing => *release,
+            })
+            .or(path.end());
+        if let Some(at) = at {
+            path.events.push(Event {
+                at,
+                kind: EventKind::Fallback(f.to_string()),
+            });
+        }
+    }
+    if let (Some(why), Some(at)) = (report.first_problem(), path.end()) {
+        path.events.push(Event {
+            at,
+            kind: EventKind::Failure(why),
+        });
+    }
+    picture.path = Some(path);
+    picture
+}
+
+/// Distance on the table (x, y).
+fn flat(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}

@@ -1,0 +1,251 @@
+//! `packwright draw` on the example cells, with diagnostics drawn where
+//! they are; `eval --plots`; and the recorded tool path that `execute
+//! --svg` draws.
+
+mod common;
+
+use common::{packwright, scratch};
+use packwright::commands::draw::{Recorder, executed_picture};
+use packwright::fsio::FsLoader;
+use packwright_motion::execute::{self, Planner};
+use packwright_pipeline::episode::{episode, find_setup};
+use packwright_pipeline::reach::RobotWorkspace;
+use std::fs;
+use std::path::PathBuf;
+
+/// Elements whose `class` attribute starts with `class` followed by a
+/// space or the closing quote.
+fn count(svg: &str, class: &str) -> usize {
+    svg.matches(&format!("class=\"{class}\"")).count()
+        + svg.matches(&format!("class=\"{class} ")).count()
+}
+
+fn is_svg(svg: &str) {
+    assert!(
+        svg.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\""),
+        "{svg:.200}"
+    );
+    assert!(svg.trim_end().ends_with("</svg>"));
+}
+
+#[test]
+fn every_example_cell_is_drawn_with_its_slots() {
+    let dir = scratch("draw", "cells");
+    for (file, slots) in [
+        ("orders/cells/line2.pack", 5),
+        ("orders/cells/twin_row.pack", 6),
+    ] {
+        let out = dir.join("cell.svg");
+        let o = packwright(&["draw", file, "-o", out.to_str().unwrap()]);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_eq!(
+            String::from_utf8_lossy(&o.stdout).trim(),
+            out.to_str().unwrap()
+        );
+        let svg = fs::read_to_string(&out).expect("written");
+        is_svg(&svg);
+        assert_eq!(count(&svg, "slot"), slots, "{file}");
+        assert_eq!(count(&svg, "product"), 0, "{file}");
+        assert_eq!(count(&svg, "reach"), 1, "{file}");
+        // The note says how to draw the products.
+        assert!(String::from_utf8_lossy(&o.stderr).contains("--inventory"));
+    }
+}
+
+#[test]
+fn an_order_has_its_products_slots_and_arrows() {
+    let o = packwright(&[
+        "draw",
+        "orders/customers/hampton_deli.pack",
+        "--order",
+        "deli_crate",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let svg = String::from_utf8(o.stdout).expect("UTF-8");
+    is_svg(&svg);
+    assert_eq!(count(&svg, "product"), 5);
+    assert_eq!(count(&svg, "product-side"), 5);
+    assert_eq!(count(&svg, "slot"), 5);
+    assert_eq!(count(&svg, "assignment"), 4);
+    assert_eq!(count(&svg, "diagnostic"), 0);
+    assert!(svg.contains("id=\"product-candle\"") && svg.contains("id=\"slot-k5\""));
+    assert!(svg.contains("order deli_crate (cell line2)"));
+}
+
+#[test]
+fn a_scenario_marks_worker_packed_and_missing_products() {
+    let o = packwright(&[
+        "draw",
+        "orders/customers/hampton_deli.pack",
+        "--scenario",
+        "deli_mixed",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let svg = String::from_utf8(o.stdout).expect("UTF-8");
+    assert_eq!(count(&svg, "product waiting"), 3);
+    assert_eq!(count(&svg, "product worker-packed"), 1);
+    assert_eq!(count(&svg, "product missing"), 1);
+    assert!(svg.contains("id=\"product-jam\"") && svg.contains("jam (worker)"));
+    assert!(svg.contains("honey (missing)"));
+    // No arrow for jam, packed already; honey's is dashed.
+    assert_eq!(count(&svg, "assignment"), 3);
+}
+
+#[test]
+fn diagnostics_are_drawn_where_they_are() {
+    let dir = scratch("draw", "diagnostics");
+    let out = dir.join("stray.svg");
+    let o = packwright(&[
+        "draw",
+        "tests/cases/err/slot_outside_box.pack",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("E030") && stderr.contains("1 in the picture"),
+        "{stderr}"
+    );
+    let svg = fs::read_to_string(&out).expect("the picture is written anyway");
+    assert_eq!(count(&svg, "diagnostic"), 1);
+    assert!(svg.contains("E030: slot `so2` is outside box `so_box`"));
+    // The red circle is on slot so2 at (-0.50, 0.25): the same centre as
+    // the slot's own circle.
+    let slot = svg.split("id=\"slot-so2\"").nth(1).expect("slot so2");
+    let cx = slot
+        .split("cx=\"")
+        .nth(1)
+        .and_then(|s| s.split('"').next())
+        .expect("cx");
+    let mark = svg.split("class=\"diagnostic\"").nth(1).expect("mark");
+    assert!(mark.contains(&format!("cx=\"{cx}\"")), "{mark:.300}");
+
+    let o = packwright(&[
+        "draw",
+        "tests/cases/err/product_outside_pending.pack",
+        "--inventory",
+        "edge_shelf",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let svg = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(count(&svg, "diagnostic"), 1);
+    assert!(svg.contains("E034"));
+}
+
+#[test]
+fn bad_requests_name_what_exists() {
+    let o = packwright(&["draw", "orders/suites/teach.pack"]);
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("line2") && stderr.contains("twin_row"),
+        "{stderr}"
+    );
+    let o = packwright(&["draw", "orders/cells/line2.pack", "--cell", "line3"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("known cells: line2"));
+    let o = packwright(&["draw", "tests/cases/err/syntax_missing_paren.pack"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(o.stdout.is_empty());
+}
+
+#[test]
+fn eval_writes_its_charts() {
+    let dir = scratch("draw", "plots");
+    let plots = dir.join("charts");
+    let o = packwright(&[
+        "eval",
+        "orders/suites/measure.pack",
+        "--suite",
+        "m_case1_2of3",
+        "--limit",
+        "2",
+        "--quiet",
+        "--plots",
+        plots.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for name in ["success_rate.svg", "latency.svg", "execution_time.svg"] {
+        let svg = fs::read_to_string(plots.join(name)).expect(name);
+        assert!(
+            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+            "{name}"
+        );
+        assert!(svg.contains("learned"), "{name} names the planner");
+    }
+    let rates = fs::read_to_string(plots.join("success_rate.svg")).expect("rates");
+    assert!(rates.contains("m_case1_2of3"));
+}
+
+/// What `execute --svg` draws: the expert packing deli_crate, recorded
+/// through the `World`, has every stage and its rests.
+#[test]
+fn the_executed_path_is_recorded_and_drawn() {
+    let files = [PathBuf::from("orders/customers/hampton_deli.pack")];
+    let files: Vec<PathBuf> = files.iter().map(|f| common::root().join(f)).collect();
+    let compiled =
+        packwright_compiler::check(&FsLoader, &files, &RobotWorkspace::new()).expect("compiles");
+    let (name, setup) = find_setup(&compiled, Some("deli_crate"), None).expect("the order");
+    let ep = episode(&compiled.model, &setup).expect("an episode");
+    let mut sim = ep
+        .simulator(ep.home().expect("home"))
+        .expect("a simulation");
+    let mut rec = Recorder::new(&mut sim);
+    let report = execute::run(&mut rec, &ep.arm, &ep.task, &Planner::Expert);
+    assert!(report.complete);
+    let cycles = rec.cycles;
+    assert!(cycles.len() > 1000, "{}", cycles.len());
+    let picture = executed_picture(&compiled.model, &name, &setup, &ep.arm, &cycles, &report);
+    let path = picture.path.as_ref().expect("a path");
+    let picks = path
+        .events
+        .iter()
+        .filter(|e| e.kind == packwright_draw::EventKind::Pick)
+        .count();
+    assert_eq!(picks, 4);
+    let svg = packwright_draw::picture(&picture).expect("draws");
+    for stage in ["approach", "carry", "retreat"] {
+        assert!(count(&svg, stage) >= 2, "{stage}");
+    }
+    assert_eq!(count(&svg, "pick"), 2 * 4);
+    assert_eq!(count(&svg, "release"), 2 * 4);
+    assert!(count(&svg, "subgoal") >= 2 * 8);
+    assert_eq!(count(&svg, "failure"), 0);
+    // Each pick is on top of its product: within 1 cm of a product's
+    // centre in x and y.
+    for e in path
+        .events
+        .iter()
+        .filter(|e| e.kind == packwright_draw::EventKind::Pick)
+    {
+        assert!(
+            picture
+                .products
+                .iter()
+                .any(|p| (p.centre[0] - e.at[0]).hypot(p.centre[1] - e.at[1]) < 0.01),
+            "pick at {:?}",
+            e.at
+        );
+    }
+}
