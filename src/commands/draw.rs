@@ -435,3 +435,20 @@ pub fn executed_picture(
 fn flat(a: [f64; 3], b: [f64; 3]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }
+
+/// `execute --svg FILE`: the executed picture written atomically, its path
+/// on stderr (stdout keeps the report).
+pub fn write_executed_svg(
+    path: &std::path::Path,
+    model: &Model,
+    name: &str,
+    setup: &Setup,
+    arm: &Arm,
+    cycles: &[(Joints, bool, bool)],
+    report: &Report,
+) -> anyhow::Result<()> {
+    let picture = executed_picture(model, name, setup, arm, cycles, report);
+    write_file_atomically(path, packwright_draw::picture(&picture)?.as_bytes())?;
+    errln!("wrote {}", path.display());
+    Ok(())
+}
