@@ -223,6 +223,27 @@ pub struct ExecuteArgs {
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Pack on a real UR10 instead of the simulator:
+    /// `ur10://HOST[:PORT]` (RTDE port, default 30004; the secondary
+    /// interface 30002 and the dashboard 29999 on the same host, or
+    /// `?secondary=PORT&dashboard=PORT`). The robot must be powered on,
+    /// brakes released, in remote control. Products are where the .pack
+    /// file puts them (a jig) unless `--products-feed` is given. A stop
+    /// (protective stop, lost connection, a refused command) stops the
+    /// arm and exits 1 with the reason; re-arming is yours (README, "The
+    /// real UR10").
+    #[arg(long, value_name = "URL")]
+    pub robot: Option<String>,
+    /// With `--robot`: connect, read the joints, plan everything (in the
+    /// simulator, from the measured joints), check the first command
+    /// against them, and move nothing.
+    #[arg(long, requires = "robot")]
+    pub dry_run: bool,
+    /// With `--robot`: product positions from a vision system, one JSON
+    /// line per observation on a local socket (`HOST:PORT`), instead of
+    /// the .pack file's positions.
+    #[arg(long, value_name = "HOST:PORT", requires = "robot")]
+    pub products_feed: Option<String>,
 }
 
 #[derive(Debug, Args)]

@@ -47,6 +47,10 @@ pub enum PipelineError {
     },
     #[error("{0}")]
     Selection(String),
+    /// The real robot's driver: unreachable, a refused recipe, not ready,
+    /// not in remote control (see `packwright_ur::UrError`).
+    #[error(transparent)]
+    Robot { source: packwright_ur::UrError },
 }
 
 /// `, FIELD` after the file name, or nothing for a whole-file problem.

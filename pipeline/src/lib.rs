@@ -14,6 +14,7 @@ pub mod models;
 pub mod motion_file;
 pub mod reach;
 pub mod replay;
+pub mod robot;
 pub mod stats;
 pub mod teach;
 

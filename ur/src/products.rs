@@ -20,8 +20,11 @@ use std::time::Duration;
 
 /// A source of product positions.
 pub trait ProductSource: Send {
-    /// Called once per control cycle with the measured joints and whether
-    /// the suction holds.
+    /// Called once per control cycle (after each [`World::step`], not
+    /// before the first) with the measured joints and whether the suction
+    /// holds.
+    ///
+    /// [`World::step`]: packwright_interface::World::step
     fn update(&mut self, joints: &Joints, suction: bool);
     /// The products as seen now.
     fn products(&self) -> Vec<Seen>;

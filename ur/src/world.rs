@@ -149,7 +149,7 @@ impl Ur10World {
     /// program that does not play (not in remote control).
     pub fn connect(
         settings: &Settings,
-        mut products: Box<dyn ProductSource>,
+        products: Box<dyn ProductSource>,
     ) -> Result<Ur10World, UrError> {
         let mut client = Client::connect(&settings.address.rtde_addr())?;
         let controller = client.controller();
@@ -208,8 +208,6 @@ impl Ur10World {
             }
             hold(&mut client, &mut sequence, &state.actual_q)?;
         }
-        let suction = read_suction(settings.sensor, settings.suction, &state);
-        products.update(&state.actual_q, suction);
         let sync: Sync = Arc::new((
             Mutex::new(Shared {
                 state,
