@@ -148,3 +148,20 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Any text: an address or an error, never a panic; a parsed
+        /// address prints as one that parses to itself.
+        #[test]
+        fn parsing_never_panics(text in "(ur10://)?[\\[\\]:?&=a-z0-9./@ ]{0,30}") {
+            if let Ok(a) = RobotAddress::parse(&text) {
+                prop_assert_eq!(RobotAddress::parse(&a.to_string()).unwrap(), a);
+            }
+        }
+    }
+}

@@ -474,3 +474,32 @@ fn a_program_already_playing_is_not_replaced() {
     assert_eq!(fake.record().scripts.len(), 1);
     assert_eq!(world.close(), None);
 }
+
+#[test]
+fn products_come_from_a_vision_feed() {
+    use packwright_ur::products::JsonFeed;
+    use std::io::Write;
+    let vision = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let at = vision.local_addr().unwrap().to_string();
+    let sender = std::thread::spawn(move || {
+        let (mut s, _) = vision.accept().unwrap();
+        s.write_all(b"{\"products\": [{\"name\": \"jam\", \"centre\": [0.6, -0.2, 0.04]}]}\n")
+            .unwrap();
+        // Keep the feed open while the world runs.
+        std::thread::sleep(Duration::from_millis(500));
+    });
+    let fake = FakeController::start(FakeConfig::default()).unwrap();
+    let feed = JsonFeed::connect(&at, Duration::from_secs(2)).unwrap();
+    let mut world = Ur10World::connect(&settings(&fake), Box::new(feed)).unwrap();
+    let started = Instant::now();
+    while world.observe().products.is_empty() {
+        assert!(started.elapsed() < Duration::from_secs(5), "no products");
+        world.step().unwrap();
+    }
+    let seen = world.observe().products;
+    assert_eq!(seen.len(), 1);
+    assert_eq!(seen[0].name, "jam");
+    assert_eq!(seen[0].centre, [0.6, -0.2, 0.04]);
+    assert_eq!(world.close(), None);
+    sender.join().unwrap();
+}
