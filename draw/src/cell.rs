@@ -739,7 +739,7 @@ fn legend_lines(picture: &Picture) -> Vec<(String, &'static str)> {
     if let Some(path) = &picture.path {
         lines.push((
             format!(
-                "tool path: {} approach, {} carry, {} retreat; numbered circles: the arm at rest; black square: start",
+                "tool path: {} approach, {} carry, {} retreat; numbered circles: sub-goals (the arm stopped or slowed); black square: start",
                 Stage::Approach.colour(),
                 Stage::Carry.colour(),
                 Stage::Retreat.colour()

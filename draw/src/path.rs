@@ -1,11 +1,13 @@
 //! The executed tool path: where the cup tip went, in which stage, and the
-//! events along it (sub-goals where the arm came to rest, the suction's
-//! switches, fallbacks, the point of a failure).
+//! events along it (sub-goals, the suction's switches, fallbacks, the
+//! point of a failure).
 //!
 //! The path is built from what a `World` sees (commanded joints through
-//! forward kinematics, and the suction), so it is the same for any
-//! planner. Sub-goals that a blend passes through without stopping leave
-//! no trace there; the numbered markers are the arm's rests.
+//! forward kinematics, their speed, and the suction), so it is the same
+//! for any planner and any world. A sub-goal is where the arm stops or,
+//! blending through a via point, slows below [`ToolPath::SLOW`] of its top
+//! speed: on the expert's packages these are exactly its sub-goals but the
+//! approach point, which it passes at speed.
 
 use crate::svg::{Attrs, Svg, num, points};
 use crate::view::View;
@@ -19,7 +21,7 @@ pub enum Stage {
     Approach,
     /// Suction on: carrying a product.
     Carry,
-    /// Suction off after a release, until the arm first comes to rest.
+    /// Suction off after a release, until the first sub-goal after it.
     Retreat,
 }
 
@@ -50,14 +52,15 @@ pub struct Sample {
     pub tip: [f64; 3],
     /// Whether the suction is on.
     pub suction: bool,
-    /// Whether the command equals the one before (the arm is at rest).
-    pub resting: bool,
+    /// The commanded joints' largest change since the cycle before (rad):
+    /// 0 at rest.
+    pub speed: f64,
 }
 
 /// Something that happened at a point of the path.
 #[derive(Debug, Clone, PartialEq)]
 pub enum EventKind {
-    /// The arm came to rest: the n-th rest (from 1).
+    /// The n-th sub-goal (from 1): the arm stopped or slowed there.
     SubGoal(usize),
     /// The suction switched on.
     Pick,
@@ -88,17 +91,20 @@ impl ToolPath {
     /// The thinning distance (m).
     pub const STEP: f64 = 0.002;
 
+    /// A sample is slow below this share of the path's top speed.
+    pub const SLOW: f64 = 0.1;
+
     /// The path of `samples` (one per control cycle, in order): stages from
     /// the suction, a `Pick`/`Release` where it switches, a numbered
-    /// `SubGoal` at the start of every rest after the arm first moved.
+    /// `SubGoal` at the slowest sample of every slow stretch after the arm
+    /// first moved.
     pub fn from_samples(samples: &[Sample]) -> ToolPath {
+        let mut subgoals = slow_points(samples).into_iter().peekable();
         let mut path = ToolPath::default();
         let mut stage = Stage::Approach;
         let mut moved_since_release = false;
-        let mut has_moved = false;
-        let mut was_resting = true;
         let mut suction = false;
-        let mut rests = 0;
+        let mut n = 0;
         for (i, s) in samples.iter().enumerate() {
             if s.suction != suction {
                 suction = s.suction;
@@ -117,8 +123,7 @@ impl ToolPath {
                     Stage::Retreat
                 };
             }
-            if !s.resting {
-                has_moved = true;
+            if s.speed > 0.0 {
                 moved_since_release = true;
             }
             let last = path.points.last().copied();
@@ -131,18 +136,17 @@ impl ToolPath {
             if keep {
                 path.points.push((s.tip, stage));
             }
-            if s.resting && !was_resting && has_moved {
-                rests += 1;
+            if subgoals.next_if_eq(&i).is_some() {
+                n += 1;
                 path.events.push(Event {
                     at: s.tip,
-                    kind: EventKind::SubGoal(rests),
+                    kind: EventKind::SubGoal(n),
                 });
-                // The rest that ends a retreat still belongs to it.
+                // The sub-goal that ends a retreat still belongs to it.
                 if stage == Stage::Retreat && moved_since_release {
                     stage = Stage::Approach;
                 }
             }
-            was_resting = s.resting;
         }
         path
     }
@@ -301,6 +305,33 @@ pub(crate) fn draw(svg: &mut Svg, path: &ToolPath, view: &View, which: &str) {
     svg.end();
 }
 
+/// The slowest sample of every stretch of samples slower than
+/// [`ToolPath::SLOW`] of the top speed, after the first fast one.
+fn slow_points(samples: &[Sample]) -> Vec<usize> {
+    let peak = samples.iter().map(|s| s.speed).fold(0.0, f64::max);
+    let slow = |i: usize| samples[i].speed <= peak * ToolPath::SLOW;
+    let mut out = Vec::new();
+    let mut i = (0..samples.len())
+        .find(|&i| !slow(i))
+        .unwrap_or(samples.len());
+    while i < samples.len() {
+        if !slow(i) {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < samples.len() && slow(i) {
+            i += 1;
+        }
+        // The first of the slowest.
+        let k = (start..i)
+            .min_by(|&a, &b| samples[a].speed.total_cmp(&samples[b].speed))
+            .unwrap_or(start);
+        out.push(k);
+    }
+    out
+}
+
 fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
@@ -313,12 +344,12 @@ mod tests {
         Sample {
             tip: [x, 0.0, 0.5],
             suction,
-            resting,
+            speed: if resting { 0.0 } else { 0.01 },
         }
     }
 
     #[test]
-    fn stages_follow_the_suction_and_rests_are_numbered() {
+    fn stages_follow_the_suction_and_stops_are_numbered() {
         let samples = [
             s(0.0, false, true),
             s(0.1, false, false),
@@ -353,6 +384,27 @@ mod tests {
             ]
         );
         assert_eq!(path.end(), Some([0.7, 0.0, 0.5]));
+    }
+
+    #[test]
+    fn a_via_point_passed_slowly_is_a_sub_goal() {
+        // Fast, slowing to a tenth at sample 3, fast again, a stop at the end.
+        let speeds = [0.0, 1.0, 0.5, 0.05, 0.08, 0.5, 1.0, 0.3, 0.0];
+        let samples: Vec<Sample> = speeds
+            .iter()
+            .enumerate()
+            .map(|(i, &speed)| Sample {
+                tip: [i as f64 * 0.01, 0.0, 0.5],
+                suction: false,
+                speed,
+            })
+            .collect();
+        let path = ToolPath::from_samples(&samples);
+        let at: Vec<f64> = path.events.iter().map(|e| e.at[0]).collect();
+        assert_eq!(at, [0.03, 0.08]);
+        // Nothing moves: no sub-goal.
+        let still = vec![samples[0]; 5];
+        assert!(ToolPath::from_samples(&still).events.is_empty());
     }
 
     #[test]

@@ -91,7 +91,8 @@ fn short_path() -> ToolPath {
                     from[2] + (to[2] - from[2]) * t,
                 ],
                 suction,
-                resting: k == 0 || k == steps,
+                // Rest to rest: slow at both ends.
+                speed: (std::f64::consts::PI * t).sin(),
             });
         }
     };

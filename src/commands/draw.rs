@@ -300,16 +300,19 @@ fn mark(
 /// draws (the same for any planner and any world).
 pub struct Recorder<'a, W: World> {
     inner: &'a mut W,
+    start: Joints,
     commanded: Option<Joints>,
     suction: bool,
-    /// (commanded joints, suction on, same command as the cycle before).
-    pub cycles: Vec<(Joints, bool, bool)>,
+    /// (commanded joints, suction on, their largest change since the
+    /// cycle before in rad) per control cycle.
+    pub cycles: Vec<(Joints, bool, f64)>,
 }
 
 impl<'a, W: World> Recorder<'a, W> {
     pub fn new(inner: &'a mut W) -> Recorder<'a, W> {
         let observed = inner.observe();
         Recorder {
+            start: observed.joints,
             commanded: Some(observed.joints),
             suction: observed.suction,
             inner,
@@ -338,8 +341,13 @@ impl<W: World> World for Recorder<'_, W> {
     fn step(&mut self) -> Result<(), WorldError> {
         self.inner.step()?;
         if let Some(q) = self.commanded {
-            let resting = self.cycles.last().is_some_and(|(last, _, _)| *last == q);
-            self.cycles.push((q, self.suction, resting));
+            let before = self.cycles.last().map_or(self.start, |(last, _, _)| *last);
+            let speed = q
+                .iter()
+                .zip(&before)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            self.cycles.push((q, self.suction, speed));
         }
         Ok(())
     }
@@ -358,7 +366,7 @@ pub fn executed_picture(
     name: &str,
     setup: &Setup,
     arm: &Arm,
-    cycles: &[(Joints, bool, bool)],
+    cycles: &[(Joints, bool, f64)],
     report: &Report,
 ) -> Picture {
     let subject = Subject::Setup {
@@ -372,12 +380,12 @@ pub fn executed_picture(
     let suction = picture.cell.suction;
     let samples: Vec<Sample> = cycles
         .iter()
-        .map(|(q, on, resting)| {
+        .map(|(q, on, speed)| {
             let tip = arm.tool_tip(&base, q, suction);
             Sample {
                 tip: [tip.x, tip.y, tip.z],
                 suction: *on,
-                resting: *resting,
+                speed: *speed,
             }
         })
         .collect();
@@ -444,7 +452,7 @@ pub fn write_executed_svg(
     name: &str,
     setup: &Setup,
     arm: &Arm,
-    cycles: &[(Joints, bool, bool)],
+    cycles: &[(Joints, bool, f64)],
     report: &Report,
 ) -> anyhow::Result<()> {
     let picture = executed_picture(model, name, setup, arm, cycles, report);
