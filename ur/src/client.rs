@@ -285,12 +285,16 @@ impl Client {
                 }
             }
             if let Some(payload) = newest.take() {
-                // Drain what has already arrived, without waiting.
-                if self.framer.pending() == 0 && !self.readable()? {
+                // Drain what has already arrived, without waiting. A closed
+                // or failed socket is reported by the next call: the
+                // package in hand is still the newest state.
+                // (A partial packet with nothing more waiting is left for
+                // the next call.)
+                let more = self.readable().unwrap_or(false);
+                if !more || self.fill(Duration::from_micros(100)).is_err() {
                     return Ok(decode_values(&output.types, &payload)?);
                 }
                 newest = Some(payload);
-                self.fill(Duration::from_micros(100))?;
                 continue;
             }
             let now = Instant::now();
@@ -409,6 +413,123 @@ fn accept(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::recipe::{RobotMode, RuntimeState, SafetyMode};
+    use std::net::TcpListener;
+
+    fn state_at(timestamp: f64) -> RobotState {
+        RobotState {
+            timestamp,
+            actual_q: [0.0; 6],
+            actual_qd: [0.0; 6],
+            target_q: [0.0; 6],
+            robot_mode: RobotMode::Running,
+            safety_mode: SafetyMode::Normal,
+            runtime_state: RuntimeState::Stopped,
+            digital_outputs: 0,
+            digital_inputs: 0,
+        }
+    }
+
+    fn package(t: f64) -> Vec<u8> {
+        let types: Vec<FieldType> = OUTPUTS.iter().map(|(_, t)| *t).collect();
+        let payload = encode_values(&types, &state_at(t).to_values()).unwrap();
+        Packet::Data { recipe: 1, payload }.encode().unwrap()
+    }
+
+    /// A controller that answers the handshake, writes `after_start` in
+    /// one write with the start reply, keeps the connection open for
+    /// `hold`, then closes it. Returns its address.
+    fn controller(after_start: Vec<u8>, hold: Duration) -> (String, std::thread::JoinHandle<()>) {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let address = listener.local_addr().unwrap().to_string();
+        let server = std::thread::spawn(move || {
+            let (mut s, _) = listener.accept().unwrap();
+            s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+            let mut framer = Framer::new();
+            let mut buf = [0u8; 1024];
+            loop {
+                let Some((kind, payload)) = framer.next_frame().unwrap() else {
+                    let n = s.read(&mut buf).unwrap();
+                    assert!(n > 0, "the client hung up");
+                    framer.push(&buf[..n]);
+                    continue;
+                };
+                let reply = match Packet::decode(Direction::ToController, kind, &payload).unwrap() {
+                    Packet::ProtocolVersionRequest { .. } => {
+                        Packet::ProtocolVersionReply { accepted: true }
+                    }
+                    Packet::ControllerVersionRequest => {
+                        Packet::ControllerVersionReply(ControllerVersion {
+                            major: 5,
+                            minor: 9,
+                            bugfix: 0,
+                            build: 0,
+                        })
+                    }
+                    Packet::SetupOutputsRequest { names, .. } => Packet::SetupOutputsReply {
+                        recipe: 1,
+                        types: names
+                            .iter()
+                            .map(|n| crate::recipe::type_of(n).unwrap().name().to_string())
+                            .collect(),
+                    },
+                    Packet::StartRequest => {
+                        let mut bytes = Packet::StartReply { accepted: true }.encode().unwrap();
+                        bytes.extend(&after_start);
+                        s.write_all(&bytes).unwrap();
+                        std::thread::sleep(hold);
+                        return;
+                    }
+                    other => panic!("unexpected {other:?}"),
+                };
+                s.write_all(&reply.encode().unwrap()).unwrap();
+            }
+        });
+        (address, server)
+    }
+
+    fn started(address: &str) -> Client {
+        let mut client = Client::connect(address).unwrap();
+        assert_eq!(client.controller().minor, 9);
+        client.setup_state(500.0).unwrap();
+        client.start().unwrap();
+        client
+    }
+
+    /// Three packages queued (and the connection closed behind them): the
+    /// newest is taken, then the close is reported.
+    #[test]
+    fn the_newest_of_queued_packages_is_taken() {
+        let bytes = [package(1.0), package(2.0), package(3.0)].concat();
+        let (address, server) = controller(bytes, Duration::ZERO);
+        let mut client = started(&address);
+        server.join().unwrap();
+        let state = client.receive_state(Duration::from_secs(2)).unwrap();
+        assert_eq!(state.timestamp, 3.0);
+        assert!(matches!(
+            client.receive_state(Duration::from_secs(2)),
+            Err(UrError::Io { .. })
+        ));
+    }
+
+    /// A package and half of the next, then silence: the whole one comes
+    /// at once, and the next call times out on the half.
+    #[test]
+    fn a_partial_package_waits_within_the_deadline() {
+        let next = package(2.0);
+        let bytes = [package(1.0), next[..20].to_vec()].concat();
+        let (address, server) = controller(bytes, Duration::from_millis(600));
+        let mut client = started(&address);
+        let t = Instant::now();
+        let state = client.receive_state(Duration::from_secs(2)).unwrap();
+        assert_eq!(state.timestamp, 1.0);
+        assert!(matches!(
+            client.receive_state(Duration::from_millis(100)),
+            Err(UrError::Timeout { .. })
+        ));
+        assert!(t.elapsed() < Duration::from_millis(500));
+        server.join().unwrap();
+    }
 
     #[test]
     fn refused_fields_are_named() {

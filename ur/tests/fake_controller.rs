@@ -26,6 +26,9 @@ fn limits() -> [Limits; DOF] {
 fn settings(fake: &FakeController) -> Settings {
     let mut s = Settings::new(RobotAddress::parse(&fake.url()).unwrap(), limits());
     s.start_timeout = Duration::from_secs(2);
+    // Half a second of silence before a stall (50 ms on a robot), so that
+    // a loaded test machine does not look like a stalled link.
+    s.stall_periods = 250;
     s
 }
 
@@ -355,7 +358,9 @@ fn a_stalled_stream_stops_and_the_watchdog_stops_the_arm() {
         ..FakeConfig::default()
     })
     .unwrap();
-    let mut world = connect(&fake);
+    let mut s = settings(&fake);
+    s.stall_periods = 25;
+    let mut world = Ur10World::connect(&s, Box::new(NoProducts)).unwrap();
     let targets = ramp(world.observe().joints, 200);
     let started = Instant::now();
     let (sent, error) = send(&mut world, &targets);
