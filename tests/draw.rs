@@ -119,7 +119,7 @@ fn diagnostics_are_drawn_where_they_are() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{stderr}");
     assert!(
-        stderr.contains("E030") && stderr.contains("1 in the picture"),
+        stderr.contains("E030") && stderr.contains("1 drawn where it is"),
         "{stderr}"
     );
     let svg = fs::read_to_string(&out).expect("the picture is written anyway");
@@ -146,6 +146,21 @@ fn diagnostics_are_drawn_where_they_are() {
     let svg = String::from_utf8_lossy(&o.stdout);
     assert_eq!(count(&svg, "diagnostic"), 1);
     assert!(svg.contains("E034"));
+
+    // An unreachable pose is crossed at its tool tip; the file's other
+    // orders' and cells' diagnostics stay out of this order's picture.
+    let o = packwright(&[
+        "draw",
+        "tests/cases/err/unreachable_poses.pack",
+        "--order",
+        "far_one",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let svg = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(count(&svg, "diagnostic"), 1);
+    assert_eq!(svg.matches("E039").count(), 3, "{svg}");
+    assert!(svg.contains("in slot `far`") && !svg.contains("slot `top`"));
+    assert!(!svg.contains("cell `edge`"));
 }
 
 #[test]

@@ -148,11 +148,17 @@ pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
     }
     let failed = failed(loaded.sources, diagnostics);
     err!("{}", failed.render());
-    let drawn = picture.marks.len();
+    let drawn = picture
+        .marks
+        .iter()
+        .filter(|m| m.place != Place::Cell)
+        .count();
     errln!(
-        "\n{} diagnostic{} ({drawn} in the picture)",
+        "\n{} diagnostic{} ({drawn} drawn where {}, {} more listed under the picture)",
         failed.errors.len(),
-        if failed.errors.len() == 1 { "" } else { "s" }
+        if failed.errors.len() == 1 { "" } else { "s" },
+        if drawn == 1 { "it is" } else { "they are" },
+        picture.marks.len() - drawn
     );
     Ok(Exit::Diagnostics)
 }
@@ -250,8 +256,9 @@ fn within(inner: Loc, outer: Loc) -> bool {
 
 /// Where diagnostic `e` is drawn, if it belongs to the picture: on the
 /// slot, box, product or assignment it is reported at; an unreachable
-/// pose at its tool tip; else listed under the picture when it is in a
-/// file that defines what is drawn.
+/// pose at its tool tip; listed under the picture only when it is reported
+/// at the drawn cell, inventory or order itself; else not in the picture
+/// (stderr has every diagnostic).
 fn mark(
     model: &Model,
     cell: usize,
@@ -282,10 +289,9 @@ fn mark(
     {
         place = Some(Place::Point(*tip));
     }
-    let files = [Some(c.loc), inv.map(|i| i.loc), ord.map(|o| o.loc)];
     let place = match place {
         Some(p) => p,
-        None if files.iter().flatten().any(|l| l.file == at.file) => Place::Cell,
+        None if ours => Place::Cell,
         None => return None,
     };
     Some(Mark {
