@@ -228,3 +228,30 @@ fn an_unreachable_robot_and_a_bad_address_are_errors() {
     assert_eq!(code, Some(2), "{stderr}");
     assert!(stderr.contains("bad robot address"), "{stderr}");
 }
+
+#[test]
+fn a_robot_not_in_remote_control_or_in_protective_stop_is_said_so() {
+    let start = deli().home().expect("a start pose");
+    let local = FakeController::start(FakeConfig {
+        start,
+        remote_control: false,
+        ..FakeConfig::default()
+    })
+    .expect("the fake starts");
+    let url = local.url();
+    let (code, _, stderr) = run(&["execute", FILE, "--order", ORDER, "--robot", &url]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("not in remote control"), "{stderr}");
+    assert!(local.record().targets.is_empty());
+    let stopped = FakeController::start(FakeConfig {
+        start,
+        safety_mode: packwright_ur::recipe::SafetyMode::ProtectiveStop,
+        ..FakeConfig::default()
+    })
+    .expect("the fake starts");
+    let url = stopped.url();
+    let (code, _, stderr) = run(&["execute", FILE, "--order", ORDER, "--robot", &url]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("not ready: protective stop"), "{stderr}");
+    assert!(stopped.record().scripts.is_empty(), "no program sent");
+}
