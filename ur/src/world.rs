@@ -63,10 +63,13 @@ pub struct Settings {
     pub stall_periods: u32,
     /// How long to wait for the program to play after sending it.
     pub start_timeout: Duration,
-    /// servoj's lookahead (s) and gain, the watchdog's frequency; the
-    /// period comes from the controller's version.
+    /// The controller's watchdog: below this frequency of sequence
+    /// changes it stops the program (Hz).
     pub watchdog_hz: f64,
+    /// servoj's lookahead time (s); the period comes from the controller's
+    /// version.
     pub lookahead: f64,
+    /// servoj's gain.
     pub gain: f64,
 }
 
