@@ -77,6 +77,8 @@ pub struct FakeConfig {
     /// A vacuum switch: (input bit, output bit) of the digital bits; the
     /// input reads what the output is set to.
     pub vacuum_input: Option<(u32, u32)>,
+    /// The digital output bits at the start.
+    pub outputs: u64,
 }
 
 impl Default for FakeConfig {
@@ -99,6 +101,7 @@ impl Default for FakeConfig {
             fragment: false,
             pace: Duration::from_millis(50),
             vacuum_input: None,
+            outputs: 0,
         }
     }
 }
@@ -369,7 +372,7 @@ impl FakeController {
             runtime: RuntimeState::Stopped,
             ints: [0; 48],
             doubles: [0.0; 48],
-            outputs: 0,
+            outputs: config.outputs,
             watchdog: None,
             servos: 0,
             injected: false,

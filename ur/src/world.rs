@@ -164,7 +164,7 @@ impl Ur10World {
         let stall = Duration::from_secs_f64(period * f64::from(settings.stall_periods.max(1)));
         let mut state = client.receive_state(stall.max(Duration::from_millis(500)))?;
         // The robot must be powered, running and safe before the program
-        // goes; a program that is not ours may be playing.
+        // goes.
         if let Err(f @ (Fault::Safety(_) | Fault::Robot(_))) = check_state(&state) {
             let _ = client.pause();
             return Err(UrError::NotReady(f));
@@ -174,6 +174,9 @@ impl Ur10World {
             let _ = client.pause();
             return Err(UrError::ProgramRunning);
         }
+        // The suction stays as it is (a product held at connection is not
+        // dropped) until the caller switches it.
+        let suction_on = state.digital_outputs >> settings.suction.bit() & 1 == 1;
         let mut sequence = 1;
         let hold = |client: &mut Client, sequence: &mut i32, q: &Joints| {
             *sequence = sequence.wrapping_add(1);
@@ -182,7 +185,7 @@ impl Ur10World {
                 Mode::Stop,
                 q,
                 settings.suction,
-                false,
+                suction_on,
             ))
         };
         hold(&mut client, &mut sequence, &state.actual_q)?;
@@ -217,7 +220,7 @@ impl Ur10World {
                 cycle: 0,
                 command: None,
                 sent: (0, 0),
-                suction: false,
+                suction: suction_on,
                 latch: Latch::default(),
                 targets: 0,
                 finish: false,

@@ -508,3 +508,21 @@ fn products_come_from_a_vision_feed() {
     assert_eq!(world.close(), None);
     sender.join().unwrap();
 }
+
+#[test]
+fn a_product_held_at_connection_is_not_dropped() {
+    let fake = FakeController::start(FakeConfig {
+        outputs: 1,
+        ..FakeConfig::default()
+    })
+    .unwrap();
+    let mut world = connect(&fake);
+    world.step().unwrap();
+    assert!(world.observe().suction, "still on");
+    world.set_suction(false).unwrap();
+    world.step().unwrap();
+    world.step().unwrap();
+    assert!(!world.observe().suction);
+    assert_eq!(world.close(), None);
+    assert_eq!(fake.record().outputs, [0], "switched only by the caller");
+}
