@@ -5,6 +5,13 @@
 //! the wrist flipped, and the straight motion to it folds the wrist into the
 //! forearm; the loop then joins another solution of the same cup pose
 //! (`Station::route_any`). These scenarios failed before that.
+//!
+//! The lift carries the product: two cells where the arm's shape at the
+//! full lift height collides with itself, so the nearest free solution is
+//! another shape, and the joint motion to it dragged the just-gripped
+//! product through the table while it was checked as if nothing were held.
+//! The lift is now checked carrying the product and lowered until the arm
+//! keeps its shape.
 
 mod common;
 use common::{packwright, scratch};
@@ -48,6 +55,83 @@ fn front_to_back_packages_are_packed_by_the_expert_and_rrt_connect() {
             out.status.code(),
             String::from_utf8_lossy(&out.stdout)
         );
+    }
+    let _ = fs::remove_dir_all(dir);
+}
+
+/// A tote behind the robot (products in front, far out) and a robot on a
+/// riser with a product near its axis: the held product touched the table
+/// during the lift in the simulator ("held:tea with table"), on motions
+/// the checker had passed.
+#[test]
+fn the_lift_carries_the_product_off_the_table() {
+    let tote = r#"cell back {
+  robot ur10
+  base (0, 0, 0)
+  suction 120 mm
+  pending (0.55, -0.35) to (0.95, 0.35)
+  box tote (-0.62, 0.05) size (0.36, 0.44, 0.12)
+  slot t1 (-0.72, -0.09)
+  slot t2 (-0.72, 0.05)
+  slot t3 (-0.72, 0.19)
+  slot t4 (-0.54, -0.09)
+}
+product soap cube 60 mm
+product tea box (80 mm, 50 mm, 60 mm)
+product nuts cube 50 mm
+product honey box (60 mm, 60 mm, 100 mm) mass 0.5
+inventory shelf for back {
+  soap (0.62, -0.25)
+  tea (0.62, 0.25)
+  nuts (0.85, -0.25)
+  honey (0.85, 0.00)
+}
+order four for shelf {
+  soap -> t2
+  tea -> t3
+  nuts -> t4
+  honey -> t1
+}
+"#;
+    let riser = r#"cell riser {
+  robot ur10
+  base (0, 0, 0.269)
+  suction 100 mm
+  pending (0.10, 0.20) to (0.25, 0.32)
+  box b (1.093, 0) size (0.12, 0.12, 0.06)
+  slot s (1.093, 0)
+}
+product c cube 32 mm
+inventory inv for riser {
+  c (0.164, 0.256)
+}
+order one for inv {
+  c -> s
+}
+"#;
+    let dir = scratch("expert", "lift");
+    for (name, text, order) in [("tote", tote, "four"), ("riser", riser, "one")] {
+        let pack = dir.join(format!("{name}.pack"));
+        fs::write(&pack, text).expect("write the cell");
+        let pack = pack.to_str().expect("utf-8");
+        for planner in ["expert", "rrt"] {
+            let out = packwright(&[
+                "execute",
+                pack,
+                "--order",
+                order,
+                "--planner",
+                planner,
+                "--json",
+            ]);
+            // Exit 0: every product packed and nothing collided.
+            assert!(
+                out.status.success(),
+                "{name} with {planner}: exit {:?}\n{}",
+                out.status.code(),
+                String::from_utf8_lossy(&out.stdout)
+            );
+        }
     }
     let _ = fs::remove_dir_all(dir);
 }

@@ -23,7 +23,7 @@ pub mod world;
 
 pub use joints::{DOF, Joints, Limits};
 pub use outcome::{
-    Failure, Fallback, FallbackKind, Hit, Outcome, PlannerKind, ProductReport, Report,
+    Budget, Failure, Fallback, FallbackKind, Hit, Outcome, PlannerKind, ProductReport, Report,
     SUCCESS_RADIUS, Shortfall, Stage, Timing, Violation,
 };
 pub use policy::{Choice, Graph, Node, Policy, SequenceRule, SubGoalQuery};

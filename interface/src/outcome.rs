@@ -110,6 +110,22 @@ pub enum Failure {
     Misplaced { error_m: f64 },
     /// The product was in its slot, then something moved it out.
     MovedLater,
+    /// Planning ran past its wall-clock budget (the arm stops where it is).
+    OutOfTime {
+        subgoal: usize,
+        budget: Budget,
+        limit_s: f64,
+    },
+}
+
+/// Which planning budget ran out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Budget {
+    /// Planning one sub-goal (its inverse kinematics, or its motion).
+    SubGoal,
+    /// Planning the whole package so far.
+    Package,
 }
 
 impl From<WorldError> for Failure {
@@ -148,6 +164,22 @@ impl fmt::Display for Failure {
             Failure::Disappeared => write!(f, "the product disappeared"),
             Failure::Misplaced { error_m } => write!(f, "released {error_m:.3} m from its goal"),
             Failure::MovedLater => write!(f, "moved out of its slot later"),
+            Failure::OutOfTime {
+                subgoal,
+                budget: Budget::SubGoal,
+                limit_s,
+            } => write!(
+                f,
+                "planning sub-goal {subgoal} took longer than its {limit_s:.1} s budget"
+            ),
+            Failure::OutOfTime {
+                subgoal,
+                budget: Budget::Package,
+                limit_s,
+            } => write!(
+                f,
+                "planning the package ran past its {limit_s:.1} s budget (at sub-goal {subgoal})"
+            ),
         }
     }
 }

@@ -63,7 +63,18 @@ pub struct Held {
     pub size: [f64; 3],
     /// The product's centre pose in the flange frame.
     pub in_flange: Isometry3<f64>,
+    /// Just gripped where it stood: it is checked with no margin below its
+    /// bottom (but [`LIFT_CLEARANCE`]), so the surface it leaves is no
+    /// obstacle while it rises, and going into that surface, or dragging
+    /// down through it, still is.
+    pub leaving_support: bool,
 }
+
+/// How far above its bottom a product leaving its support is checked from
+/// (m): the check box stops this short of the product's bottom, so that
+/// resting on the surface is no collision. Below the simulator's 1 mm
+/// tolerance for a held product's penetration.
+pub const LIFT_CLEARANCE: f64 = 0.0005;
 
 impl Held {
     /// A product of `size` held by its top face under a cup `suction` long,
@@ -77,6 +88,16 @@ impl Held {
                 (beside + Vector3::new(0.0, 0.0, suction + size[2] / 2.0)).into(),
                 UnitQuaternion::identity(),
             ),
+            leaving_support: false,
+        }
+    }
+
+    /// The same product while it is lifted off where it stood (the lift
+    /// right after the grip).
+    pub fn leaving_support(self) -> Held {
+        Held {
+            leaving_support: true,
+            ..self
         }
     }
 }
@@ -247,12 +268,21 @@ impl Checker {
         }
         if let Some(h) = held {
             let flange = self.arm.flange_pose(&self.base, q);
-            let hp = pose(&(flange * h.in_flange));
             let pad = self.held_padding;
+            // Leaving its support, the box keeps its margin above but ends
+            // LIFT_CLEARANCE short of the bottom (the product's +z is the
+            // flange's, pointing down).
+            let (half_z, shift) = if h.leaving_support {
+                let cut = pad + LIFT_CLEARANCE;
+                (h.size[2] / 2.0 + pad - cut / 2.0, -cut / 2.0)
+            } else {
+                (h.size[2] / 2.0 + pad, 0.0)
+            };
+            let hp = pose(&(flange * h.in_flange * Isometry3::translation(0.0, 0.0, shift)));
             let cuboid = SharedShape::new(Cuboid::new(Vector::new(
                 (h.size[0] / 2.0 + pad) as f32,
                 (h.size[1] / 2.0 + pad) as f32,
-                (h.size[2] / 2.0 + pad) as f32,
+                half_z as f32,
             )));
             let aabb = cuboid.compute_aabb(&hp);
             let name = Body::Held(h.name.clone());

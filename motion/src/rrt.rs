@@ -13,6 +13,7 @@ use crate::collision::{Checker, Held};
 use packwright_kinematics::{DOF, Joints, Limits};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use std::time::Instant;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct RrtConfig {
@@ -23,6 +24,9 @@ pub struct RrtConfig {
     /// Shortcut attempts on the found path.
     pub shortcuts: usize,
     pub seed: u64,
+    /// Give up (no path) once this wall-clock time has passed, whatever
+    /// samples are left.
+    pub deadline: Option<Instant>,
 }
 
 impl Default for RrtConfig {
@@ -32,6 +36,7 @@ impl Default for RrtConfig {
             max_samples: 4000,
             shortcuts: 100,
             seed: 0,
+            deadline: None,
         }
     }
 }
@@ -185,6 +190,9 @@ pub fn search(
     let mut b = Tree::new(goal);
     let mut a_is_start = true;
     for _ in 0..config.max_samples {
+        if config.deadline.is_some_and(|d| Instant::now() >= d) {
+            return None;
+        }
         let sample: Joints = std::array::from_fn(|j| rng.random_range(bounds[j].0..=bounds[j].1));
         if let Extend::Advanced(i) | Extend::Reached(i) =
             extend(&mut a, &sample, config.step, query)

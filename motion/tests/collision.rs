@@ -177,6 +177,12 @@ fn rrt_connect_plans_valid_and_reproducible_paths() {
     }
     let again = rrt::plan(&query, a, b, &config).expect("same plan");
     assert_eq!(path, again, "same seed, same path");
+    // A search whose deadline has passed gives up at once.
+    let late = RrtConfig {
+        deadline: Some(std::time::Instant::now()),
+        ..config.clone()
+    };
+    assert!(rrt::plan(&query, a, b, &late).is_none());
     // A goal inside an obstacle has no plan.
     let inside = ik(&arm, polar(0.6, -35.0, 0.2));
     assert!(rrt::plan(&query, a, inside, &config).is_none());

@@ -119,6 +119,55 @@ fn the_expert_packs_an_order() {
     }
 }
 
+/// A planning budget that has run out stops the arm with its own
+/// failure, for each planner; the first product is not moved.
+#[test]
+fn planning_past_its_budget_stops_the_arm() {
+    use packwright_interface::outcome::{Budget, Failure};
+    use packwright_motion::execute::PlanningBudget;
+    use std::time::Duration;
+    let assign = [("C", "g1"), ("A", "g3")];
+    let cases = [
+        (Duration::ZERO, Duration::from_secs(60), Budget::SubGoal),
+        (Duration::from_secs(60), Duration::ZERO, Budget::Package),
+    ];
+    for (subgoal, package, which) in cases {
+        let (_, task, _) = episode(&assign, &[], &[]);
+        let policy = Scripted {
+            task,
+            wrong_pick: None,
+        };
+        let learned = Planner::Learned {
+            policy: &policy,
+            seed: 3,
+        };
+        for planner in [Planner::Expert, Planner::Rrt { seed: 1 }, learned] {
+            let (arm, task, mut sim) = episode(&assign, &[], &[]);
+            let budget = PlanningBudget { subgoal, package };
+            let report = execute::run_within(&mut sim, &arm, &task, &planner, budget);
+            assert!(!report.complete);
+            match &report.products[0].outcome {
+                Outcome::Failed(Failure::OutOfTime {
+                    subgoal: 1, budget, ..
+                }) => assert_eq!(*budget, which),
+                other => panic!("{other:?}"),
+            }
+            assert_eq!(report.products[1].outcome, Outcome::NotAttempted);
+            assert_eq!(report.products[0].execution_s, 0.0, "the arm did not move");
+        }
+    }
+    // The default budget is far from any plan: the same order packs.
+    let (arm, task, mut sim) = episode(&assign, &[], &[]);
+    let budget = PlanningBudget::default();
+    assert_packed(&execute::run_within(
+        &mut sim,
+        &arm,
+        &task,
+        &Planner::Expert,
+        budget,
+    ));
+}
+
 #[test]
 fn execution_is_above_its_lower_bound_and_a_slower_arm_takes_longer() {
     let assign = [("C", "g1"), ("A", "g3")];

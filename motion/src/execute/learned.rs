@@ -10,8 +10,8 @@
 
 use super::reasoner::{f32s, graph, in_slot, lifted};
 use super::station::{
-    Connect, Leg, Load, MAX_RAISES, RAISE_STEP, Route, SUCCESS_RADIUS, Station, Unchecked, judge,
-    leg_end,
+    Connect, Leg, Load, MAX_RAISES, PlanningBudget, RAISE_STEP, Route, SUCCESS_RADIUS, Station,
+    Unchecked, judge, leg_end,
 };
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
@@ -163,6 +163,10 @@ struct StagePlan<'l> {
     /// Picking: the sensed top face, where the cup's descent stops.
     contact: Option<f64>,
     load: Load<'l>,
+    /// Picking: the product's size; the sub-goals after the grip (the
+    /// lift) carry it off where it stood, hanging from the cup as the
+    /// planned contact leaves it.
+    gripped: Option<[f64; 3]>,
 }
 
 /// The learned loop over the shared stepping primitives.
@@ -281,8 +285,11 @@ impl<W: World> Learned<'_, W> {
         // sub-goal from where the one before leaves the arm.
         let mut start = leg_end(&pending).unwrap_or_else(|| self.station.world.observe().joints);
         let mut legs = pending;
+        // The product as it will hang once gripped.
+        let mut gripped: Option<Held> = None;
         for (k, switch) in schedule(plan.stage).into_iter().enumerate() {
-            let started = Instant::now();
+            let load = gripped.as_ref().map_or(plan.load, Load::holding);
+            let started = self.station.begin();
             let tool = f32s(self.station.tip(&start));
             let mut goal = self
                 .policy
@@ -317,16 +324,16 @@ impl<W: World> Learned<'_, W> {
                 let tolerance = tolerance(plan.stage, k);
                 let mut first_action_us = None;
                 // The first attempt's shortfall is the one reported.
-                let mut rolled =
-                    self.rollout(start, goal, tolerance, plan.load, &mut first_action_us);
+                let mut rolled = self.rollout(start, goal, tolerance, load, &mut first_action_us);
                 let mut raised = 1;
                 while rolled.is_err()
                     && raised <= MAX_RAISES
+                    && !self.station.late()
                     && goal[2] + RAISE_STEP * f64::from(raised) <= ceiling
                 {
                     let higher = [goal[0], goal[1], goal[2] + RAISE_STEP * f64::from(raised)];
                     if let Ok(samples) =
-                        self.rollout(start, higher, tolerance, plan.load, &mut first_action_us)
+                        self.rollout(start, higher, tolerance, load, &mut first_action_us)
                     {
                         rolled = Ok(samples);
                     }
@@ -353,26 +360,51 @@ impl<W: World> Learned<'_, W> {
                         tip: goal,
                         suction: switch,
                     };
-                    self.fall_back(k, start, target, plan.load, ceiling)?
+                    self.fall_back(k, start, target, load, ceiling)?
                 }
             };
-            let elapsed = started.elapsed().as_secs_f64();
+            let elapsed = self.station.spend(k + 1, started)?;
             self.station.timing.subgoal_us.push(elapsed * 1e6);
-            self.station.clock.planning_s += elapsed;
             if let Some(end) = route.waypoints.last() {
                 start = *end;
             }
             tips[k] = self.station.tip(&start);
-            legs.push(Leg::new(route, switch, plan.load));
+            legs.push(Leg::new(route, switch, load));
+            if let (Suction::On, Some(size), Some(top)) = (switch, plan.gripped, plan.contact) {
+                gripped = Some(self.gripped_at(&start, plan, size, top));
+            }
         }
         let tail = self.station.send_legs(legs, keep_tail)?;
         Ok((Reached { goals, tips }, tail))
     }
 
+    /// The product `plan` picks, of `size`, whose top face is at height
+    /// `top`, as it hangs from the cup once the suction grips it with the
+    /// arm at `contact` (the learned contact is within a tolerance of the
+    /// face's centre: the product hangs that far off the cup's axis, and
+    /// higher when the tip went below the face), leaving where it stood.
+    fn gripped_at(&self, contact: &Joints, plan: &StagePlan, size: [f64; 3], top: f64) -> Held {
+        let s = &self.station;
+        let tip = s.tip(contact);
+        let flange = s.arm.flange_pose(&s.base, contact).rotation;
+        let off = Vector3::new(
+            plan.feature[0] - tip[0],
+            plan.feature[1] - tip[1],
+            top - tip[2],
+        );
+        Held::under_cup(
+            plan.product,
+            size,
+            s.task.cell.suction,
+            flange.inverse() * off,
+        )
+        .leaving_support()
+    }
+
     /// Backs off straight up to the height of `above` (the learned "above
     /// the slot" sub-goal) from the released product `name`.
     fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<(), Failure> {
-        let started = Instant::now();
+        let started = self.station.begin();
         let load = Load::ignoring(name);
         // The released product where it lies (its last observed place was
         // under the cup).
@@ -407,7 +439,7 @@ impl<W: World> Learned<'_, W> {
                 s.checked(1, start, &vias, load).map_err(|_| straight)?
             }
         };
-        self.station.clock.planning_s += started.elapsed().as_secs_f64();
+        self.station.spend(1, started)?;
         self.station.send(&route.samples, Suction::Keep)
     }
 
@@ -482,6 +514,7 @@ impl<W: World> Learned<'_, W> {
                 height: spec.size[2],
                 contact: Some(centre[2] + spec.size[2] / 2.0),
                 load: Load::ignoring(name),
+                gripped: Some(spec.size),
             },
             Vec::new(),
             true,
@@ -539,6 +572,7 @@ impl<W: World> Learned<'_, W> {
                 height: spec.size[2],
                 contact: None,
                 load: Load::holding(&held),
+                gripped: None,
             },
             lift,
             false,
@@ -556,9 +590,12 @@ pub(super) fn run<W: World>(
     task: &OrderTask,
     policy: &dyn Policy,
     seed: u64,
+    budget: PlanningBudget,
 ) -> Report {
+    let mut station = Station::new(world, arm, task);
+    station.budget = budget;
     let mut runner = Learned {
-        station: Station::new(world, arm, task),
+        station,
         policy,
         rule: policy.sequence(),
         seed,

@@ -30,7 +30,8 @@ pub use learned::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps
 pub use reachable::{Reachability, Unreached};
 pub use reasoner::{demonstrated_decisions, expected_next, graph, reasoner_trial};
 pub use station::{
-    HOME_HEIGHT, Load, Unchecked, checked_blend, checked_samples, home, home_tip, reach,
+    HOME_HEIGHT, Load, PlanningBudget, Unchecked, checked_blend, checked_samples, home, home_tip,
+    reach,
 };
 
 use packwright_interface::outcome::{PlannerKind, Report};
@@ -62,12 +63,33 @@ impl Planner<'_> {
 /// Packs `task` in `world` with `arm`. The world's arm starts wherever it
 /// is; products are found by name in the observations.
 pub fn run<W: World>(world: &mut W, arm: &Arm, task: &OrderTask, planner: &Planner) -> Report {
+    run_within(world, arm, task, planner, PlanningBudget::default())
+}
+
+/// [`run`] with a planning budget other than the default: a product whose
+/// planning overruns it fails with [`Failure::OutOfTime`] and the arm
+/// stops.
+///
+/// [`Failure::OutOfTime`]: packwright_interface::Failure::OutOfTime
+pub fn run_within<W: World>(
+    world: &mut W,
+    arm: &Arm,
+    task: &OrderTask,
+    planner: &Planner,
+    budget: PlanningBudget,
+) -> Report {
+    let straight = station::Connect::Straight;
     match *planner {
-        Planner::Expert => scripted::run(world, arm, task, station::Connect::Straight, None),
-        Planner::Rrt { seed } => {
-            scripted::run(world, arm, task, station::Connect::Rrt { seed }, None)
-        }
-        Planner::Learned { policy, seed } => learned::run(world, arm, task, policy, seed),
+        Planner::Expert => scripted::run(world, arm, task, straight, None, budget),
+        Planner::Rrt { seed } => scripted::run(
+            world,
+            arm,
+            task,
+            station::Connect::Rrt { seed },
+            None,
+            budget,
+        ),
+        Planner::Learned { policy, seed } => learned::run(world, arm, task, policy, seed, budget),
     }
 }
 
@@ -79,5 +101,13 @@ pub fn run_recorded<W: World>(
     task: &OrderTask,
     log: &mut MotionLog,
 ) -> Report {
-    scripted::run(world, arm, task, station::Connect::Straight, Some(log))
+    let budget = PlanningBudget::default();
+    scripted::run(
+        world,
+        arm,
+        task,
+        station::Connect::Straight,
+        Some(log),
+        budget,
+    )
 }

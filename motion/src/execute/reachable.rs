@@ -3,12 +3,13 @@
 //! [`expert::placing`]), the same inverse kinematics and collision check
 //! against the cell's fixtures, the same raised release
 //! ([`Station::solve`](super::station::Station::solve)) as `execute`, and
-//! the straight moves between them (the descent to the top face, the lift,
-//! the descent into the slot). What it does not know: other products
+//! the straight moves between them (the descent to the top face, the lift
+//! carrying the product, lowered where it must be, the descent into the
+//! slot). What it does not know: other products
 //! standing in the cell, and the carrying motions (lift to approach to
 //! above the slot: a swing or a search); `execute` reports those.
 
-use super::station::{Load, MAX_RAISES, RAISE_STEP, READY, home_on, home_tip, solutions};
+use super::station::{Load, MAX_RAISES, MIN_LIFT, RAISE_STEP, READY, home_on, home_tip, solutions};
 use crate::collision::{Checker, Held};
 use crate::expert::{self, SubGoal};
 use nalgebra::{Point3, Vector3};
@@ -109,8 +110,20 @@ impl Reachability {
     /// before).
     pub fn picking(&self, size: [f64; 3], at: [f64; 2]) -> Result<(), Unreached> {
         let mut from: Option<Vec<Joints>> = None;
-        for (k, goal) in self.picking_goals(size, at).iter().enumerate() {
-            let reached = self.step(goal, &[goal.tip[2]], from.as_deref(), Load::FREE);
+        let goals = self.picking_goals(size, at);
+        // The lift carries the product off the table, and may be lowered
+        // down to MIN_LIFT above the top face (as `Station::solve` does).
+        let gripped = Held::under_cup("held", size, self.cell.suction, Vector3::zeros());
+        let lifting = gripped.leaving_support();
+        let lowered: Vec<f64> = (0..=MAX_RAISES)
+            .map(|i| goals[2].tip[2] - RAISE_STEP * f64::from(i))
+            .take_while(|z| *z >= goals[1].tip[2] + MIN_LIFT)
+            .collect();
+        for (k, goal) in goals.iter().enumerate() {
+            let reached = match k {
+                2 => self.step(goal, &lowered, from.as_deref(), Load::holding(&lifting)),
+                _ => self.step(goal, &[goal.tip[2]], from.as_deref(), Load::FREE),
+            };
             if reached.is_empty() {
                 return Err(Unreached {
                     stage: Stage::Picking,

@@ -4,7 +4,9 @@
 //! joints among the free ones, joined straight or by RRT-Connect; the
 //! expert's runs can be recorded as motion demonstrations.
 
-use super::station::{Connect, Leg, Load, SUCCESS_RADIUS, Station, distance, judge, leg_end};
+use super::station::{
+    Connect, Leg, Load, PlanningBudget, SUCCESS_RADIUS, Station, distance, judge, leg_end,
+};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction};
 use nalgebra::Vector3;
@@ -49,26 +51,26 @@ impl<W: World> Scripted<'_, W> {
         from: Joints,
         goals: &[SubGoal],
         yaw: f64,
-        load: Load,
+        loads: [Load; 3],
     ) -> Result<Vec<Planned>, Failure> {
-        let started = Instant::now();
         let mut out = Vec::new();
         let mut current = from;
-        for (k, g) in goals.iter().enumerate() {
-            let subgoal_started = Instant::now();
+        for ((k, g), load) in goals.iter().enumerate().zip(loads) {
+            let started = self.station.begin();
             let ceiling = goals
                 .get(k.wrapping_sub(1))
                 .map_or(g.tip[2], |prev| prev.tip[2]);
-            let joints = self.station.solve(g, k + 1, &current, yaw, load, ceiling)?;
+            let solved = self.station.solve(g, k + 1, &current, yaw, load, ceiling);
+            let took = self.station.spend(k + 1, started)?;
+            let joints = solved?;
             out.push(Planned {
                 goal: *g,
                 joints,
                 ceiling,
-                solve_us: subgoal_started.elapsed().as_secs_f64() * 1e6,
+                solve_us: took * 1e6,
             });
             current = joints;
         }
-        self.station.clock.planning_s += started.elapsed().as_secs_f64();
         Ok(out)
     }
 
@@ -124,7 +126,7 @@ impl<W: World> Scripted<'_, W> {
         &mut self,
         plan: Vec<Planned>,
         yaw: f64,
-        load: Load,
+        loads: [Load; 3],
         info: Option<StageInfo>,
         pending: Vec<Leg>,
         keep_tail: bool,
@@ -132,8 +134,8 @@ impl<W: World> Scripted<'_, W> {
         let mut start = leg_end(&pending).unwrap_or_else(|| self.station.world.observe().joints);
         let mut replanned = false;
         let mut legs = pending;
-        for (k, planned) in plan.into_iter().enumerate() {
-            let started = Instant::now();
+        for ((k, planned), load) in plan.into_iter().enumerate().zip(loads) {
+            let started = self.station.begin();
             let how = match self.connect {
                 Connect::Rrt { seed } => Connect::Rrt {
                     seed: seed.wrapping_add(k as u64),
@@ -147,8 +149,7 @@ impl<W: World> Scripted<'_, W> {
                 Ok(planned.joints)
             }
             .and_then(|target| self.station.route_any(how, k + 1, start, target, yaw, load));
-            let elapsed = started.elapsed().as_secs_f64();
-            self.station.clock.planning_s += elapsed;
+            let elapsed = self.station.spend(k + 1, started)?;
             self.station
                 .timing
                 .subgoal_us
@@ -176,7 +177,11 @@ impl<W: World> Scripted<'_, W> {
         let h = spec.size[2];
         let picking = expert::picking(centre, h, cell.lift);
         let free = Load::ignoring(name);
-        let plan = self.plan_stage(obs.joints, &picking, yaw, free)?;
+        // Once gripped, the lift carries the product off where it stood.
+        let gripped = Held::under_cup(name, spec.size, cell.suction, Vector3::zeros());
+        let lifting = gripped.clone().leaving_support();
+        let picking_loads = [free, free, Load::holding(&lifting)];
+        let plan = self.plan_stage(obs.joints, &picking, yaw, picking_loads)?;
         let pick = StageInfo {
             stage: Stage::Picking,
             feature: centre,
@@ -184,10 +189,10 @@ impl<W: World> Scripted<'_, W> {
             height: h,
         };
         // The lift is sent with the carry, blended into it.
-        let lift = self.run_stage(plan, yaw, free, Some(pick), Vec::new(), true)?;
+        let lift = self.run_stage(plan, yaw, picking_loads, Some(pick), Vec::new(), true)?;
 
         let obs = self.station.world.observe();
-        let held = Held::under_cup(name, spec.size, cell.suction, Vector3::zeros());
+        let held = gripped;
         let slot = cell.slots[s].position;
         let placing = expert::placing(
             picking[2].tip,
@@ -200,14 +205,14 @@ impl<W: World> Scripted<'_, W> {
         let carrying = Load::holding(&held);
         // Placing the product square in its slot: yaw 0 (it turns with the cup).
         let from = leg_end(&lift).unwrap_or(obs.joints);
-        let plan = self.plan_stage(from, &placing, 0.0, carrying)?;
+        let plan = self.plan_stage(from, &placing, 0.0, [carrying; 3])?;
         let place = StageInfo {
             stage: Stage::Placing,
             feature: task.slot_rim(s),
             label: s as u32 + 1,
             height: h,
         };
-        self.run_stage(plan, 0.0, carrying, Some(place), lift, false)?;
+        self.run_stage(plan, 0.0, [carrying; 3], Some(place), lift, false)?;
 
         // Back up from the released product, which the checker now sees
         // where it lies (its last observed place was under the cup).
@@ -217,8 +222,8 @@ impl<W: World> Scripted<'_, W> {
             tip: [slot[0], slot[1], placing[1].tip[2]],
             suction: Suction::Keep,
         }];
-        let plan = self.plan_stage(obs.joints, &up, 0.0, free)?;
-        self.run_stage(plan, 0.0, free, None, Vec::new(), false)
+        let plan = self.plan_stage(obs.joints, &up, 0.0, [free; 3])?;
+        self.run_stage(plan, 0.0, [free; 3], None, Vec::new(), false)
             .map(|_| ())
     }
 }
@@ -229,13 +234,16 @@ pub(super) fn run<W: World>(
     task: &OrderTask,
     connect: Connect,
     log: Option<&mut MotionLog>,
+    budget: PlanningBudget,
 ) -> Report {
     let planner = match connect {
         Connect::Straight => PlannerKind::Expert,
         Connect::Rrt { .. } => PlannerKind::Rrt,
     };
+    let mut station = Station::new(world, arm, task);
+    station.budget = budget;
     let mut runner = Scripted {
-        station: Station::new(world, arm, task),
+        station,
         connect,
         log,
     };

@@ -14,11 +14,14 @@ use crate::expert::{SubGoal, Suction};
 use crate::rrt::{self, Query, RrtConfig};
 use crate::smoothing::lower_bound;
 use nalgebra::{Isometry3, Point3};
-use packwright_interface::outcome::{Failure, Hit, PlannerKind, ProductReport, Report, Timing};
+use packwright_interface::outcome::{
+    Budget, Failure, Hit, PlannerKind, ProductReport, Report, Timing,
+};
 use packwright_interface::world::{Contact, Observation, World};
 use packwright_interface::{CellScene, OrderTask};
 use packwright_kinematics::{Arm, Joints, joint_distance, tool_down_pose};
 use std::f64::consts::FRAC_PI_2;
+use std::time::{Duration, Instant};
 
 /// How much a release point is raised at a time when the wrist cannot
 /// reach it.
@@ -26,6 +29,9 @@ pub(crate) const RAISE_STEP: f64 = 0.01;
 /// Most raises of a release point (1 m in all): the search is bounded
 /// whatever the sub-goal.
 pub(crate) const MAX_RAISES: u32 = 100;
+/// The lowest a lift may be lowered to, above where the cup gripped (m):
+/// the cell language's smallest `lift`.
+pub(crate) const MIN_LIFT: f64 = 0.02;
 /// Cycles to wait after switching the suction on (0.1 s).
 const SUCTION_SETTLE: usize = 50;
 /// Cycles to let a released product settle (0.5 s).
@@ -85,6 +91,27 @@ pub(crate) enum Connect {
     Rrt { seed: u64 },
 }
 
+/// Wall-clock planning allowed, per sub-goal and for a whole package. Every
+/// planning loop is bounded by counts too (RRT-Connect's samples, the
+/// policy's steps, the raises of a release); the budget bounds the time
+/// those counts can take on a slow or loaded machine. A run that goes
+/// over stops with [`Failure::OutOfTime`]. The defaults are far above
+/// what any measured plan took (README, "Reliability").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlanningBudget {
+    pub subgoal: Duration,
+    pub package: Duration,
+}
+
+impl Default for PlanningBudget {
+    fn default() -> PlanningBudget {
+        PlanningBudget {
+            subgoal: Duration::from_secs(10),
+            package: Duration::from_secs(120),
+        }
+    }
+}
+
 /// Wall-clock planning and simulated motion of the product in hand.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Clock {
@@ -138,6 +165,12 @@ pub(crate) struct Station<'a, W: World> {
     pub checker: Checker,
     pub clock: Clock,
     pub timing: Timing,
+    pub budget: PlanningBudget,
+    /// Planning spent on the package so far.
+    pub package_planning: Duration,
+    /// When the sub-goal being planned must be done (RRT-Connect stops
+    /// searching then).
+    pub deadline: Option<Instant>,
 }
 
 impl<'a, W: World> Station<'a, W> {
@@ -151,6 +184,45 @@ impl<'a, W: World> Station<'a, W> {
             base: Isometry3::translation(x, y, z),
             clock: Clock::default(),
             timing: Timing::default(),
+            budget: PlanningBudget::default(),
+            package_planning: Duration::ZERO,
+            deadline: None,
+        }
+    }
+
+    /// Starts planning a sub-goal: its deadline is the sooner of its own
+    /// budget and what is left of the package's.
+    pub fn begin(&mut self) -> Instant {
+        let now = Instant::now();
+        let left = self.budget.package.saturating_sub(self.package_planning);
+        self.deadline = Some(now + self.budget.subgoal.min(left));
+        now
+    }
+
+    /// Whether the sub-goal being planned is past its deadline.
+    pub fn late(&self) -> bool {
+        self.deadline.is_some_and(|d| Instant::now() >= d)
+    }
+
+    /// Ends planning sub-goal `k` (from 1) begun at `started`: its time
+    /// counts for the product and the package, and a budget it overran
+    /// stops the run. The seconds it took.
+    pub fn spend(&mut self, k: usize, started: Instant) -> Result<f64, Failure> {
+        let took = started.elapsed();
+        self.deadline = None;
+        self.clock.planning_s += took.as_secs_f64();
+        self.package_planning += took;
+        let over = |budget, limit: Duration| Failure::OutOfTime {
+            subgoal: k,
+            budget,
+            limit_s: limit.as_secs_f64(),
+        };
+        if took > self.budget.subgoal {
+            Err(over(Budget::SubGoal, self.budget.subgoal))
+        } else if self.package_planning > self.budget.package {
+            Err(over(Budget::Package, self.budget.package))
+        } else {
+            Ok(took.as_secs_f64())
         }
     }
 
@@ -183,7 +255,13 @@ impl<'a, W: World> Station<'a, W> {
     /// Joints that put the cup tip at sub-goal `goal` (number `k`, from 1)
     /// from `from`. A release the straight descent cannot reach (checked
     /// as the commands will be) is raised [`RAISE_STEP`] at a time up to
-    /// `ceiling`: the product drops the rest of the way.
+    /// `ceiling`: the product drops the rest of the way. A lift (the
+    /// product just gripped, [`Held::leaving_support`]) must be reached by
+    /// the straight motion too, carrying the product: where that motion
+    /// cannot (the arm's shape at full height differs, and the joint
+    /// motion to another shape would drag the product), it is lowered
+    /// [`RAISE_STEP`] at a time down to [`MIN_LIFT`] above where the cup
+    /// gripped.
     pub fn solve(
         &self,
         goal: &SubGoal,
@@ -196,13 +274,15 @@ impl<'a, W: World> Station<'a, W> {
         if goal.tip.iter().any(|v| !v.is_finite()) {
             return Err(Failure::NonFiniteSubGoal { subgoal: k });
         }
+        let lifting = goal.suction == Suction::Keep && load.held.is_some_and(|h| h.leaving_support);
         let solve = |z: f64| {
             let tip = Point3::new(goal.tip[0], goal.tip[1], z);
             let q = reach(&self.checker, tip, yaw, from, load)?;
-            let blocked = goal.suction == Suction::Off
+            let blocked = (goal.suction == Suction::Off || lifting)
                 && checked_samples(self.arm, &self.checker, *from, &[q], load).is_err();
             (!blocked).then_some(q)
         };
+        let floor = self.tip(from)[2] + MIN_LIFT;
         solve(goal.tip[2])
             .or_else(|| {
                 (goal.suction == Suction::Off)
@@ -210,6 +290,16 @@ impl<'a, W: World> Station<'a, W> {
                         (1..=MAX_RAISES)
                             .map(|i| goal.tip[2] + RAISE_STEP * f64::from(i))
                             .take_while(|z| *z <= ceiling)
+                            .find_map(solve)
+                    })
+                    .flatten()
+            })
+            .or_else(|| {
+                lifting
+                    .then(|| {
+                        (1..=MAX_RAISES)
+                            .map(|i| goal.tip[2] - RAISE_STEP * f64::from(i))
+                            .take_while(|z| *z >= floor)
                             .find_map(solve)
                     })
                     .flatten()
@@ -268,6 +358,7 @@ impl<'a, W: World> Station<'a, W> {
                 };
                 let config = RrtConfig {
                     seed,
+                    deadline: self.deadline,
                     ..RrtConfig::default()
                 };
                 let path =
@@ -389,7 +480,9 @@ impl<'a, W: World> Station<'a, W> {
                 checked_blend_by(self.arm, &self.checker, start, &waypoints, &stops, load_of).ok()
             })
             .flatten();
-        self.clock.planning_s += started.elapsed().as_secs_f64();
+        let took = started.elapsed();
+        self.clock.planning_s += took.as_secs_f64();
+        self.package_planning += took;
         let Some(blended) = blended else {
             for leg in &legs {
                 self.send(&leg.route.samples, leg.suction)?;
