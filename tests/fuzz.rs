@@ -7,6 +7,10 @@
 //! within a time bound. A failing input is written to
 //! `target/fuzz-failures/` with its seed.
 //!
+//! A watchdog thread sees every input in flight: one still running after
+//! [`HANG`] (a real hang would never return to be timed) is saved and the
+//! process ends with its description, instead of the test blocking.
+//!
 //! `fuzz_short` runs in every `cargo test`; the long run is
 //! `cargo test --release --test fuzz -- --ignored --nocapture`
 //! (`FUZZ_INPUTS`, default 1,000,000, and `FUZZ_SEED`).
@@ -26,10 +30,16 @@ use rayon::prelude::*;
 use std::fs;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// The longest one input may take (debug builds included).
 const BOUND: Duration = Duration::from_secs(5);
+
+/// An input still running after this long is taken for a hang: the
+/// watchdog saves it and ends the process.
+const HANG: Duration = Duration::from_secs(60);
 
 /// One compiled input in this many has an artifact mutated and read back.
 const READ_BACK_EVERY: u64 = 4;
@@ -300,14 +310,67 @@ struct Tally {
     read_back: u64,
 }
 
-/// Runs input number `i` of the stream seeded `seed`; `Err` with a
-/// description (the input saved) if it panicked or took too long.
-fn one(corpus: &[(PathBuf, String)], seed: u64, i: u64, scratch: &Path) -> Result<Tally, String> {
+/// The input each worker is running: its number, when it started and its
+/// text, for the watchdog.
+type InFlight = Mutex<Vec<Option<(u64, Instant, String)>>>;
+
+/// Writes a failing input where the README says, and says where.
+fn save(seed: u64, i: u64, input: &str) -> PathBuf {
+    let saved = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("fuzz-failures")
+        .join(format!("seed{seed}-input{i}.pack"));
+    if let Some(parent) = saved.parent() {
+        let _ = fs::create_dir_all(parent);
+    }
+    let _ = fs::write(&saved, input);
+    saved
+}
+
+/// Watches the inputs in flight until `done`: one running longer than
+/// [`HANG`] is saved and the process exits (a hung thread cannot be
+/// stopped otherwise).
+fn watchdog(seed: u64, in_flight: &InFlight, done: &AtomicBool) {
+    while !done.load(Ordering::Relaxed) {
+        std::thread::sleep(Duration::from_millis(200));
+        let Ok(slots) = in_flight.lock() else {
+            return;
+        };
+        for (i, started, input) in slots.iter().flatten() {
+            if started.elapsed() > HANG {
+                let saved = save(seed, *i, input);
+                eprintln!(
+                    "fuzz: input {i} of seed {seed} has run for over {HANG:?} (a hang); saved as {}",
+                    saved.display()
+                );
+                std::process::exit(101);
+            }
+        }
+    }
+}
+
+/// Runs input number `i` of the stream seeded `seed` as worker `worker`;
+/// `Err` with a description (the input saved) if it panicked or took too
+/// long.
+fn one(
+    corpus: &[(PathBuf, String)],
+    seed: u64,
+    i: u64,
+    scratch: &Path,
+    (worker, in_flight): (usize, &InFlight),
+) -> Result<Tally, String> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ i.wrapping_mul(0x9e37_79b9_7f4a_7c15));
     let (path, text) = &corpus[rng.random_range(0..corpus.len())];
     let other = &corpus[rng.random_range(0..corpus.len())].1;
     let input = mutate(&mut rng, text, other);
     let started = Instant::now();
+    let track = |now: Option<(u64, Instant, String)>| {
+        if let Ok(mut slots) = in_flight.lock()
+            && let Some(slot) = slots.get_mut(worker)
+        {
+            *slot = now;
+        }
+    };
+    track(Some((i, started, input.clone())));
     let run = catch_unwind(AssertUnwindSafe(|| {
         let mut tally = Tally {
             inputs: 1,
@@ -356,18 +419,13 @@ fn one(corpus: &[(PathBuf, String)], seed: u64, i: u64, scratch: &Path) -> Resul
         tally
     }));
     let took = started.elapsed();
+    track(None);
     let failure = match (&run, took > BOUND) {
         (Err(_), _) => "panicked".to_owned(),
         (Ok(_), true) => format!("took {took:?}"),
         (Ok(t), false) => return Ok(*t),
     };
-    let saved = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("fuzz-failures")
-        .join(format!("seed{seed}-input{i}.pack"));
-    if let Some(parent) = saved.parent() {
-        let _ = fs::create_dir_all(parent);
-    }
-    let _ = fs::write(&saved, &input);
+    let saved = save(seed, i, &input);
     Err(format!(
         "input {i} of seed {seed} (a mutation of {}) {failure}; saved as {}",
         path.display(),
@@ -380,6 +438,30 @@ fn fuzz(n: u64, seed: u64) -> Tally {
     let corpus = corpus();
     assert!(corpus.len() >= 30, "the corpus: {} files", corpus.len());
     let threads = rayon::current_num_threads().max(1) as u64;
+    let in_flight: InFlight = Mutex::new(vec![None; threads as usize]);
+    let done = AtomicBool::new(false);
+    /// Stops the watchdog when the workers end, panicking or not.
+    struct Done<'a>(&'a AtomicBool);
+    impl Drop for Done<'_> {
+        fn drop(&mut self) {
+            self.0.store(true, Ordering::Relaxed);
+        }
+    }
+    std::thread::scope(|scope| {
+        scope.spawn(|| watchdog(seed, &in_flight, &done));
+        let _done = Done(&done);
+        work(&corpus, n, seed, threads, &in_flight)
+    })
+}
+
+/// The workers of [`fuzz`]: inputs `t, t + threads, …` each.
+fn work(
+    corpus: &[(PathBuf, String)],
+    n: u64,
+    seed: u64,
+    threads: u64,
+    in_flight: &InFlight,
+) -> Tally {
     let tallies: Vec<Tally> = (0..threads)
         .into_par_iter()
         .map(|t| {
@@ -387,7 +469,7 @@ fn fuzz(n: u64, seed: u64) -> Tally {
                 .join(format!("packwright-fuzz-{}-{seed}-{t}", std::process::id()));
             let mut total = Tally::default();
             for i in (t..n).step_by(threads as usize) {
-                match one(&corpus, seed, i, &scratch) {
+                match one(corpus, seed, i, &scratch, (t as usize, in_flight)) {
                     Ok(x) => {
                         total.inputs += x.inputs;
                         total.compiled += x.compiled;
