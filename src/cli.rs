@@ -57,13 +57,14 @@ pub enum Command {
     /// Example: `packwright draw orders/customers/hampton_deli.pack --order
     /// deli_crate -o deli.svg`. Without `-o` the SVG goes to stdout.
     Draw(DrawArgs),
-    /// Pack an order in the physical simulator and report each product.
+    /// Pack an order in the physical simulator, or on a real UR10
+    /// (`--robot ur10://HOST`), and report each product.
     ///
     /// The order (or a scenario: products a worker already packed, missing
-    /// stock, jittered positions) is packed by the scripted expert or by
-    /// RRT-Connect, with jerk-limited (Ruckig) motion at the UR10's 2 ms
-    /// control cycle. Prints one row per product: planning time, simulated
-    /// execution time, final distance from the slot goal, outcome. Exit 0
+    /// stock, jittered positions) is packed by the learned planner, the
+    /// scripted expert or RRT-Connect, with jerk-limited (Ruckig) motion at
+    /// the UR10's 2 ms control cycle. Prints one row per product: planning
+    /// time, execution time, final distance from the slot goal, outcome. Exit 0
     /// when the package is complete, 1 when it is not (the arm stopped
     /// safely, or products wait for restocking), 2 on bad input.
     Execute(ExecuteArgs),
@@ -223,8 +224,8 @@ pub struct ExecuteArgs {
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
-    /// Pack on a real UR10 instead of the simulator:
-    /// `ur10://HOST[:PORT]` (RTDE port, default 30004; the secondary
+    /// Pack on a real UR10 instead of the simulator (`sim`, the default):
+    /// `ur10://HOST[:PORT]` or `ur://HOST[:PORT]` (RTDE port, default 30004; the secondary
     /// interface 30002 and the dashboard 29999 on the same host, or
     /// `?secondary=PORT&dashboard=PORT`). The robot must be powered on,
     /// brakes released, in remote control. Products are where the .pack

@@ -227,6 +227,21 @@ fn an_unreachable_robot_and_a_bad_address_are_errors() {
     let (code, _, stderr) = run(&["execute", FILE, "--order", ORDER, "--robot", "ur5://x"]);
     assert_eq!(code, Some(2), "{stderr}");
     assert!(stderr.contains("bad robot address"), "{stderr}");
+    // `sim` (the specification's spelling) is the simulator, where a dry
+    // run has nothing to connect to.
+    let (code, _, stderr) = run(&["execute", FILE, "--order", ORDER, "--robot", "sim"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let (code, _, stderr) = run(&[
+        "execute",
+        FILE,
+        "--order",
+        ORDER,
+        "--robot",
+        "sim",
+        "--dry-run",
+    ]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("--dry-run needs a real robot"), "{stderr}");
 }
 
 #[test]

@@ -31,7 +31,14 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
     let (name, setup) = find_setup(&compiled, args.order.as_deref(), args.scenario.as_deref())?;
     let ep = episode(&compiled.model, &setup)?;
     // A bad robot address is bad input, found before anything else.
-    let address = args.robot.as_deref().map(RobotAddress::parse).transpose()?;
+    // `sim` (the specification's spelling of the default) is the simulator.
+    let address = match args.robot.as_deref() {
+        None | Some("sim") => None,
+        Some(url) => Some(RobotAddress::parse(url)?),
+    };
+    if args.dry_run && address.is_none() {
+        anyhow::bail!("--dry-run needs a real robot: --robot ur10://HOST");
+    }
     let (kind, model) = choose_planner(args.planner, args.model.as_deref(), &ep.task.cell.name)?;
     if let Some(nets) = &model
         && !taught(nets, &ep.task.cell.name)

@@ -1,4 +1,5 @@
-//! Robot addresses: `ur10://HOST[:PORT][?secondary=PORT&dashboard=PORT]`.
+//! Robot addresses: `ur10://HOST[:PORT][?secondary=PORT&dashboard=PORT]`
+//! (`ur://` is accepted for `ur10://`, the specification's spelling).
 //!
 //! `PORT` is the RTDE port (30004 by default); the secondary interface and
 //! the dashboard server default to 30002 and 29999 on the same host (a
@@ -41,6 +42,7 @@ impl RobotAddress {
         };
         let rest = url
             .strip_prefix("ur10://")
+            .or_else(|| url.strip_prefix("ur://"))
             .ok_or_else(|| bad("expected ur10://HOST[:PORT]"))?;
         let (authority, query) = rest.split_once('?').unwrap_or((rest, ""));
         let authority = authority.strip_suffix('/').unwrap_or(authority);
@@ -133,6 +135,7 @@ mod tests {
         let b = RobotAddress::parse("ur10://127.0.0.1:4000?secondary=4001&dashboard=4002").unwrap();
         assert_eq!((b.rtde, b.secondary, b.dashboard), (4000, 4001, 4002));
         assert_eq!(RobotAddress::parse(&b.to_string()).unwrap(), b);
+        assert_eq!(RobotAddress::parse("ur://192.168.1.10").unwrap(), a);
         let c = RobotAddress::parse("ur10://[::1]:5").unwrap();
         assert_eq!(c.rtde_addr(), "[::1]:5");
         for bad in [
