@@ -134,7 +134,18 @@ pub struct Ur10World {
     next_id: u64,
     t0: f64,
     stall: Duration,
+    /// Planner cycles per controller cycle: 1 on an e-Series (2 ms), 4 on
+    /// a CB3 (8 ms).
+    substeps: u32,
+    /// Planner cycles since the last controller cycle.
+    substep: u32,
 }
+
+/// The planner's control period (s): its Ruckig commands are 2 ms apart
+/// whatever the controller. On a slower controller (a CB3's 8 ms) the
+/// world takes several of them per controller cycle and streams the last:
+/// the same trajectory, sampled at the controller's rate, at full speed.
+pub const PLANNER_PERIOD: f64 = 0.002;
 
 impl std::fmt::Debug for Ur10World {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -262,6 +273,8 @@ impl Ur10World {
             next_id: 1,
             t0: state.timestamp,
             stall,
+            substeps: ((period / PLANNER_PERIOD).round() as u32).max(1),
+            substep: 0,
         })
     }
 
@@ -352,8 +365,10 @@ fn read_suction(sensor: SuctionSensor, output: DigitalOutput, s: &RobotState) ->
 }
 
 impl World for Ur10World {
+    /// The planner's period: the controller's divided by the planner
+    /// cycles it takes ([`PLANNER_PERIOD`] on a UR10 of either series).
     fn control_period(&self) -> f64 {
-        self.period
+        self.period / f64::from(self.substeps)
     }
 
     fn observe(&self) -> Observation {
@@ -386,8 +401,19 @@ impl World for Ur10World {
     }
 
     /// Hands the target (or a hold) to the streaming thread and waits until
-    /// it was sent and the next state arrived: one control cycle.
+    /// it was sent and the next state arrived: one controller cycle. On a
+    /// controller slower than the planner (a CB3), only every
+    /// `substeps`-th planner cycle does so, with the latest target; the
+    /// others only keep it.
     fn step(&mut self) -> Result<(), WorldError> {
+        self.substep += 1;
+        if self.substep < self.substeps {
+            return match self.fault() {
+                Some(f) => Err(self.stopped(f)),
+                None => Ok(()),
+            };
+        }
+        self.substep = 0;
         let id = self.next_id;
         self.next_id += 1;
         let target = self.pending.take();

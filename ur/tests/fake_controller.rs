@@ -157,16 +157,16 @@ fn a_cb3_streams_at_125_hz() {
     })
     .unwrap();
     let mut world = connect(&fake);
-    assert_eq!(world.control_period(), 0.008);
-    // 4 mrad per 8 ms cycle: 0.5 rad/s.
-    let targets: Vec<Joints> = ramp(world.observe().joints, 80)
-        .into_iter()
-        .step_by(4)
-        .collect();
-    assert_eq!(send(&mut world, &targets).1, None);
+    // The planner's 2 ms commands, four per 8 ms controller cycle: the
+    // last of each four is streamed, so the motion keeps its speed.
+    assert_eq!(world.control_period(), 0.002);
+    let commands = ramp(world.observe().joints, 80);
+    assert_eq!(send(&mut world, &commands).1, None);
     drop(world);
     let record = fake.record();
-    assert_eq!(record.targets, targets);
+    let streamed: Vec<Joints> = commands.iter().skip(3).step_by(4).copied().collect();
+    assert_eq!(streamed.len(), 20);
+    assert_eq!(record.targets, streamed);
     assert!(record.scripts[0].contains("servoj(q, 0, 0, 0.0080"));
 }
 
