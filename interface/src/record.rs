@@ -76,6 +76,29 @@ pub fn action(q: &Joints, goal: &Joints) -> [f64; 3] {
     clip([short_way(goal[0] - q[0]), goal[1] - q[1], goal[2] - q[2]])
 }
 
+/// Largest change (rad) of a cup-down invariant that still counts as the
+/// same wrist shape in [`keeps_cup_down`].
+pub const SHAPE_TOLERANCE: f64 = 0.02;
+
+/// Whether the straight joint motion from `start` to `goal` is one the
+/// dynamics policy's steps can make: they move the base, shoulder and
+/// elbow and turn the wrist so that the cup keeps pointing down with its
+/// yaw (`execute::cup_down`), which keeps q1 + q2 + q3, q4 and q5 − q0
+/// (modulo 2π) unchanged. A motion that changes them (the expert going to
+/// another shape of the arm, where the nearest one collides) cannot be
+/// imitated step by step, and its action labels would contradict the
+/// others': such sub-goals are not taught to the dynamics policy (the
+/// sub-goal planner still learns them; at run time RRT-Connect finishes
+/// what the policy cannot).
+pub fn keeps_cup_down(start: &Joints, goal: &Joints) -> bool {
+    let wrap = |v: f64| short_way(v).abs();
+    let pitch = |q: &Joints| q[1] + q[2] + q[3];
+    let twist = |q: &Joints| q[5] - q[0];
+    (pitch(goal) - pitch(start)).abs() <= SHAPE_TOLERANCE
+        && (goal[4] - start[4]).abs() <= SHAPE_TOLERANCE
+        && wrap(twist(goal) - twist(start)) <= SHAPE_TOLERANCE
+}
+
 /// `turn` plus the multiple of 2π that puts it within (−π, π].
 pub fn short_way(turn: f64) -> f64 {
     use std::f64::consts::{PI, TAU};
@@ -101,6 +124,30 @@ pub fn clip(step: [f64; 3]) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Cup-down poses of one UR10 cup tip (found on a probe cell): the
+    /// arm's shape at the contact, the same shape 15 cm higher, another
+    /// elbow shape, and a flipped wrist with the base turned round.
+    #[test]
+    fn a_change_of_wrist_shape_is_not_a_cup_down_motion() {
+        let contact = [0.638, -2.132, -1.72, -4.002, -1.571, -4.074];
+        let lifted = [0.638, -1.994, -1.625, -4.235, -1.571, -4.074];
+        let elbow = [0.638, -3.549, 1.625, -5.931, -1.571, -4.074];
+        let flipped = [3.281, 0.407, -1.625, -3.494, -4.712, -4.573];
+        assert!(keeps_cup_down(&contact, &lifted));
+        assert!(
+            keeps_cup_down(&contact, &elbow),
+            "the policy moves q0-q2 freely"
+        );
+        assert!(!keeps_cup_down(&contact, &flipped));
+        // The base and wrist 3 turned together a whole turn: the same.
+        let mut round = lifted;
+        round[0] += std::f64::consts::TAU;
+        assert!(keeps_cup_down(&contact, &round));
+        let mut twisted = lifted;
+        twisted[5] += 0.5;
+        assert!(!keeps_cup_down(&contact, &twisted));
+    }
 
     #[test]
     fn spread_and_clip() {

@@ -5,7 +5,7 @@ use crate::episode::demonstration_episode;
 use crate::error::Result;
 use packwright_compiler::artifact::{DemonstrationRecord, WorldFile};
 use packwright_interface::SubGoalQuery;
-use packwright_interface::record::MotionLog;
+use packwright_interface::record::{self, MotionLog};
 use packwright_motion::execute;
 use packwright_nets::{ActionExample, SubGoalExample};
 use rayon::prelude::*;
@@ -62,9 +62,17 @@ pub fn motion_examples(
             target: f32s(s.target),
         })
         .collect();
+    // The dynamics policy learns only the motions it can make (the wrist
+    // keeping the cup down; `record::keeps_cup_down`).
+    let imitable: Vec<bool> = log
+        .subgoals
+        .iter()
+        .map(|s| record::keeps_cup_down(&s.start, &s.goal))
+        .collect();
     let actions = log
         .actions
         .iter()
+        .filter(|a| imitable.get(a.subgoal).copied().unwrap_or(false))
         .map(|a| ActionExample {
             delta: f32s(a.delta),
             joints: f32s(a.joints),

@@ -56,6 +56,9 @@ impl<'a> ExpertCoach<'a> {
         let motions = logs
             .iter()
             .flat_map(|r| r.log.subgoals.iter().map(move |s| (r, s)))
+            // Only the motions the policy's cup-down steps can make
+            // (`record::keeps_cup_down`), as in its training set.
+            .filter(|(_, s)| record::keeps_cup_down(&s.start, &s.goal))
             .map(|(r, s)| Motion {
                 start: s.start,
                 goal: s.goal,
