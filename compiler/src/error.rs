@@ -193,6 +193,10 @@ pub enum Error {
     },
     #[error("{count} goal configurations are more than the {limit} a block may generate")]
     TooManyConfigurations { at: Loc, count: String, limit: u64 },
+    #[error(
+        "the files together would generate {count} demonstrations and cases, more than the {limit} of one compilation"
+    )]
+    TooManyInTotal { at: Loc, count: u64, limit: u64 },
     #[error("the sequence does not match order `{order}`")]
     SequenceMismatch {
         at: Loc,
@@ -247,6 +251,7 @@ impl Error {
             Error::JitterImpossible { .. } => "E045",
             Error::KeepsNothing { .. } => "E046",
             Error::TooManyConfigurations { .. } => "E047",
+            Error::TooManyInTotal { .. } => "E048",
             Error::SequenceMismatch { .. } => "E050",
             Error::NotSelected { .. } => "E051",
             Error::PackedAndMissing { .. } => "E052",
@@ -287,6 +292,7 @@ impl Error {
             | Error::JitterImpossible { at, .. }
             | Error::KeepsNothing { at, .. }
             | Error::TooManyConfigurations { at, .. }
+            | Error::TooManyInTotal { at, .. }
             | Error::SequenceMismatch { at, .. }
             | Error::NotSelected { at, .. }
             | Error::PackedAndMissing { at, .. } => Some(*at),
@@ -334,6 +340,7 @@ impl Error {
             Error::JitterImpossible { .. } => "this jitter is too large".into(),
             Error::KeepsNothing { .. } => "keeps nothing".into(),
             Error::TooManyConfigurations { .. } => "too many configurations".into(),
+            Error::TooManyInTotal { .. } => "this block goes over the total".into(),
             Error::SequenceMismatch { .. } => "this sequence".into(),
             Error::NotSelected { .. } => "not in the order".into(),
             Error::PackedAndMissing { .. } => "both packed and missing".into(),
@@ -399,6 +406,7 @@ impl Error {
             Error::JitterImpossible { .. } => "lower the jitter, space the products further apart, or enlarge the pending area".into(),
             Error::KeepsNothing { .. } => "raise `keep`".into(),
             Error::TooManyConfigurations { .. } => "generate fewer: `choose` fewer products or slots, `keep` a smaller share of the combinations (counted after `keep`), a lower `repeat`, or (scenarios) a lower `count`".into(),
+            Error::TooManyInTotal { .. } => "generate fewer in this or an earlier block (`choose`, `keep`, `repeat`, `count`), or compile the blocks in separate runs".into(),
             Error::SequenceMismatch {
                 left_out,
                 not_selected,

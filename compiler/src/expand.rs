@@ -21,6 +21,10 @@ use rand_chacha::ChaCha8Rng;
 
 /// A block may generate at most this many demonstrations or cases.
 pub const MAX_GENERATED: u64 = 1_000_000;
+/// The files of one compilation together may generate at most this many
+/// demonstrations and cases (everything generated is held in memory: see
+/// README, "Reliability").
+pub const MAX_GENERATED_TOTAL: u64 = 1_000_000;
 /// Redraws of one product's jitter before giving up.
 pub const JITTER_TRIES: u32 = 100;
 
@@ -132,6 +136,38 @@ pub fn expand(m: &Model) -> Result<Expanded, Vec<Error>> {
             },
             sequence: d.sequence.clone(),
         });
+    }
+    // Every block's size is counted before anything is generated: one
+    // too large, or one that takes the files over the total, is refused
+    // at the statement that sets its size, and nothing is generated.
+    let mut generated = out.demonstrations.len() as u64;
+    let sizes = m
+        .demo_sets
+        .iter()
+        .map(|d| demos_count(d).map(|n| (n, d.choose.loc)))
+        .chain(
+            m.scenario_sets
+                .iter()
+                .map(|s| scenarios_count(s).map(|n| (n, s.count_loc))),
+        );
+    for size in sizes {
+        match size {
+            Ok((count, at)) => {
+                let before = generated;
+                generated = generated.saturating_add(count);
+                if before <= MAX_GENERATED_TOTAL && generated > MAX_GENERATED_TOTAL {
+                    errors.push(Error::TooManyInTotal {
+                        at,
+                        count: generated,
+                        limit: MAX_GENERATED_TOTAL,
+                    });
+                }
+            }
+            Err(e) => errors.push(e),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
     }
     for d in &m.demo_sets {
         if let Err(e) = demo_set(m, d, &mut out) {
@@ -249,6 +285,16 @@ fn kept_count(d: &DemosDef) -> Result<(usize, usize), Error> {
         return Err(too_many(at, total));
     }
     Ok((n_combos, keep))
+}
+
+/// How many demonstrations a `demos` block generates (after `keep`, times
+/// `repeat`), or why it may not.
+fn demos_count(d: &DemosDef) -> Result<u64, Error> {
+    let c = &d.choose;
+    let (_, keep) = kept_count(d)?;
+    let per_combo = arrangement_count(c.slots.len(), c.n);
+    // kept_count bounds it by MAX_GENERATED.
+    Ok(((keep as u128) * per_combo * d.repeat as u128) as u64)
 }
 
 fn demo_set(m: &Model, d: &DemosDef, out: &mut Expanded) -> Result<(), Error> {
@@ -482,7 +528,8 @@ fn scenario(m: &Model, s: &ScenarioDef) -> Result<Suite, Error> {
     })
 }
 
-fn scenario_set(m: &Model, s: &ScenariosDef) -> Result<Suite, Error> {
+/// How many cases a `scenarios` block generates, or why it may not.
+fn scenarios_count(s: &ScenariosDef) -> Result<u64, Error> {
     if s.count as u64 > MAX_GENERATED {
         return Err(Error::TooManyConfigurations {
             at: s.count_loc,
@@ -490,6 +537,12 @@ fn scenario_set(m: &Model, s: &ScenariosDef) -> Result<Suite, Error> {
             limit: MAX_GENERATED,
         });
     }
+    Ok(s.count as u64)
+}
+
+/// A `scenarios` block's cases (its size was checked by
+/// [`scenarios_count`] before anything was generated).
+fn scenario_set(m: &Model, s: &ScenariosDef) -> Result<Suite, Error> {
     let c = &s.choose;
     let inv = &m.inventories[s.inventory];
     let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
