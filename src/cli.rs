@@ -224,6 +224,14 @@ pub struct ExecuteArgs {
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Also draw the executed tool path over the cell as an SVG file
+    /// (written atomically): top and side view, coloured by stage
+    /// (approach, carry, retreat), the sub-goals numbered (where the arm
+    /// stopped or slowed), the start, each pick and release, fallbacks to
+    /// RRT-Connect and the point where a failure stopped the arm. Simulated
+    /// runs only.
+    #[arg(long, value_name = "FILE")]
+    pub svg: Option<PathBuf>,
     /// Pack on a real UR10 instead of the simulator (`sim`, the default):
     /// `ur10://HOST[:PORT]` or `ur://HOST[:PORT]` (RTDE port, default 30004; the secondary
     /// interface 30002 and the dashboard 29999 on the same host, or

@@ -291,3 +291,36 @@ fn the_executed_path_is_recorded_and_drawn() {
         );
     }
 }
+
+#[test]
+fn execute_draws_its_path() {
+    let dir = scratch("draw", "execute");
+    let out = dir.join("path.svg");
+    let o = packwright(&[
+        "execute",
+        "orders/customers/hampton_deli.pack",
+        "--order",
+        "deli_crate",
+        "--planner",
+        "expert",
+        "--svg",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("package complete"));
+    let svg = fs::read_to_string(&out).expect("written");
+    is_svg(&svg);
+    assert_eq!(count(&svg, "product"), 5);
+    for stage in ["approach", "carry", "retreat"] {
+        assert!(count(&svg, stage) >= 2, "{stage}");
+    }
+    assert_eq!(count(&svg, "pick"), 2 * 4);
+    assert!(count(&svg, "subgoal") >= 2 * 12);
+    assert_eq!(count(&svg, "failure"), 0);
+    assert!(svg.contains("deli_crate, planner expert"));
+}

@@ -3,6 +3,7 @@
 
 use crate::Exit;
 use crate::cli::ExecuteArgs;
+use crate::commands::draw::{Recorder, write_executed_svg};
 use crate::fsio::FsLoader;
 use packwright_interface::outcome::{Outcome, PlannerKind, Report};
 use packwright_interface::world::World;
@@ -58,10 +59,26 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
         (None, _) => Planner::Expert,
     };
     if let Some(address) = address {
+        if args.svg.is_some() {
+            anyhow::bail!("--svg draws simulated runs only (no --robot)");
+        }
         return on_robot(args, &address, &name, &ep, &planner);
     }
     let mut sim = ep.simulator(ep.home()?)?;
-    let report = execute::run(&mut sim, &ep.arm, &ep.task, &planner);
+    let mut recorder = Recorder::new(&mut sim);
+    let report = execute::run(&mut recorder, &ep.arm, &ep.task, &planner);
+    if let Some(path) = &args.svg {
+        let cycles = &recorder.cycles;
+        write_executed_svg(
+            path,
+            &compiled.model,
+            &name,
+            &setup,
+            &ep.arm,
+            cycles,
+            &report,
+        )?;
+    }
     print_outcome(args, &name, &report, "simulated")
 }
 
