@@ -282,7 +282,6 @@ impl<'a, W: World> Station<'a, W> {
                 && checked_samples(self.arm, &self.checker, *from, &[q], load).is_err();
             (!blocked).then_some(q)
         };
-        let floor = self.tip(from)[2] + MIN_LIFT;
         solve(goal.tip[2])
             .or_else(|| {
                 (goal.suction == Suction::Off)
@@ -297,6 +296,7 @@ impl<'a, W: World> Station<'a, W> {
             .or_else(|| {
                 lifting
                     .then(|| {
+                        let floor = self.tip(from)[2] + MIN_LIFT;
                         (1..=MAX_RAISES)
                             .map(|i| goal.tip[2] - RAISE_STEP * f64::from(i))
                             .take_while(|z| *z >= floor)
