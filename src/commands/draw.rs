@@ -76,12 +76,11 @@ pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
             setup,
         }
     } else if let Some(name) = &args.order {
-        let Some(o) = model.orders.iter().position(|o| &o.name == name) else {
-            bail!(
-                "no order `{name}`; known orders: {}",
-                names(model.orders.iter().map(|o| &o.name))
-            );
-        };
+        let o = index_of(
+            model.orders.iter().map(|o| &o.name),
+            name,
+            ("order", "orders"),
+        )?;
         let order = &model.orders[o];
         let inv = &model.inventories[order.inventory];
         Subject::Setup {
@@ -96,20 +95,14 @@ pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
             },
         }
     } else if let Some(name) = &args.inventory {
-        let Some(i) = model.inventories.iter().position(|i| &i.name == name) else {
-            bail!(
-                "no inventory `{name}`; known inventories: {}",
-                names(model.inventories.iter().map(|i| &i.name))
-            );
-        };
+        let i = index_of(
+            model.inventories.iter().map(|i| &i.name),
+            name,
+            ("inventory", "inventories"),
+        )?;
         Subject::Inventory(i)
     } else if let Some(name) = &args.cell {
-        let Some(c) = model.cells.iter().position(|c| &c.name == name) else {
-            bail!(
-                "no cell `{name}`; known cells: {}",
-                names(model.cells.iter().map(|c| &c.name))
-            );
-        };
+        let c = index_of(model.cells.iter().map(|c| &c.name), name, ("cell", "cells"))?;
         Subject::Cell(c)
     } else if model.cells.len() == 1 {
         Subject::Cell(0)
@@ -161,6 +154,19 @@ pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
         picture.marks.len() - drawn
     );
     Ok(Exit::Diagnostics)
+}
+
+/// Where `name` stands among `all`, the names of the `what`s
+/// (singular, plural), or an error that lists them.
+fn index_of<'a>(
+    all: impl Iterator<Item = &'a String> + Clone,
+    name: &str,
+    (what, plural): (&str, &str),
+) -> anyhow::Result<usize> {
+    match all.clone().position(|n| n == name) {
+        Some(i) => Ok(i),
+        None => bail!("no {what} `{name}`; known {plural}: {}", names(all)),
+    }
 }
 
 fn names<'a>(names: impl Iterator<Item = &'a String>) -> String {
