@@ -2,37 +2,44 @@
 //!
 //! [`smooth_path`](crate::smoothing::smooth_path) stops at every waypoint:
 //! each leg is a rest-to-rest, phase-synchronised Ruckig move, a straight
-//! line in joint space. [`blend`] keeps those very legs and overlaps
-//! consecutive ones in time: leg `k + 1` starts before leg `k` has
-//! stopped, and the arm follows their sum. Where two legs overlap, the
-//! path leaves the corner's two straight segments, but stays inside the
-//! triangle they span (each leg is monotone in every joint), and rejoins
-//! them once the overlap ends.
+//! line in joint space. [`blend`] keeps those very legs and, at a corner
+//! passed through, leaves leg `k` before it has stopped and joins leg
+//! `k + 1` after it has started by a *transition*: the time-optimal Ruckig
+//! trajectory (time-synchronised) from leg `k`'s state (position, velocity,
+//! acceleration) at the leaving time to leg `k + 1`'s state at the joining
+//! time. Outside the transitions the arm is on the straight legs. A
+//! transition is never slower than overlapping the two legs in time (that
+//! sum joins the same two states within the same limits, and Ruckig's is
+//! the fastest way to), and unlike the sum it cannot add the legs' jerks.
 //!
 //! # Contract
 //!
-//! - **Limits**: every joint's velocity, acceleration and jerk (the exact
-//!   sum of the legs' Ruckig states) stay within its [`Limits`] at all
-//!   times (checked exactly, phase by phase: between the legs' phase
-//!   boundaries the summed jerk is constant), and its position within
-//!   `[lower, upper]` at those boundaries. Each overlap is
-//!   the largest of [`CANDIDATES`] fractions of the room there for which
-//!   that holds; none (the legs joined at rest, as today) always does.
+//! - **Limits**: every joint's velocity, acceleration and jerk stay within
+//!   its [`Limits`] at all times: on the legs by Ruckig's construction, on
+//!   each transition checked exactly, phase by phase (between its phase
+//!   boundaries the jerk is constant), with the position within
+//!   `[lower, upper]` at those boundaries. At the joins position, velocity
+//!   and acceleration are continuous. Each corner's transition is the one
+//!   saving the most time among [`CANDIDATES`] fractions of the room there
+//!   (capped per corner by the caller, [`blend_capped`]); none (the legs
+//!   joined at rest, as when stopping everywhere) always keeps the limits.
 //! - **Stops**: a waypoint marked as a stop, and the last one, is
-//!   commanded exactly, at rest, on a control cycle; the legs either side
-//!   of it do not overlap.
+//!   commanded exactly, at rest, on a control cycle; no transition passes
+//!   it.
 //! - **Straight next to every stop**: a leg that leaves or reaches a stop
-//!   (or the start, or the end) is overlapped only in its half away from
-//!   it, so the arm leaves and reaches each stop along the straight
-//!   segment for at least half the leg, as when stopping everywhere: the
-//!   descent onto a product's top face and into a slot, and the way back
-//!   up, are not cut (the product being picked or just released is no
-//!   obstacle to the collision check there).
-//! - **At most two legs overlap** at any instant.
+//!   (or the start, or the end) keeps at least [`MIN_STRAIGHT`] of its
+//!   time next to it on the straight segment (rest-to-rest profiles are
+//!   symmetric: half the time is half the way): the final straight descent
+//!   onto a top face or into a slot, and the first straight part of the
+//!   way back up, where the product being picked or just released is no
+//!   obstacle to the collision check.
+//! - **Transitions are disjoint**: each leg is left after it was joined, so
+//!   at most one transition is running at any instant.
 //! - The commands are what a caller checks for collisions and sends;
-//!   [`Blended::corners`] says how long each corner's overlap is, how close
-//!   the motion passes to the waypoint and which samples it shaped, so a
-//!   caller whose check fails near a corner can make that corner a stop
+//!   [`Blended::corners`] says how much time each corner's transition
+//!   saves, how close the motion passes to the waypoint and which samples
+//!   the transition shaped, so a caller whose check fails near a corner can
+//!   cap that corner or make it a stop
 //!   ([`checked_blend`](crate::execute::checked_blend) does).
 
 use rsruckig::prelude::*;
@@ -41,8 +48,13 @@ use crate::error::{Position, SmoothingError};
 use crate::smoothing::{CONTROL_PERIOD, rest_to_rest, ruckig_input};
 use packwright_interface::{DOF, Joints, Limits};
 
-/// How many overlaps are tried per corner, from the largest room down.
-pub const CANDIDATES: usize = 16;
+/// How many transitions are tried per corner: these fractions of the room
+/// there, from all of it down.
+pub const CANDIDATES: usize = 4;
+
+/// The least share of its time a leg leaving or reaching a stop keeps on
+/// its straight segment next to the stop.
+pub const MIN_STRAIGHT: f64 = 0.5;
 
 /// Relative slack on a limit for rounding (Ruckig's own profiles touch
 /// their limits within ~1e-12).
@@ -51,13 +63,14 @@ const SLACK: f64 = 1e-9;
 /// One corner of a blended motion: the waypoint between two legs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Corner {
-    /// Seconds the two legs overlap (0: the arm stops at the waypoint).
-    pub overlap: f64,
+    /// Seconds the corner's transition saves against stopping there (0:
+    /// the arm stops at the waypoint).
+    pub saved: f64,
     /// How close (rad, the largest joint's difference) the commands pass
     /// to the waypoint: 0 at a stop.
     pub miss: f64,
-    /// The commanded samples the overlap shaped (`first..end`; empty at a
-    /// stop).
+    /// The commanded samples the transition shaped (`first..end`; empty at
+    /// a stop).
     pub samples: std::ops::Range<usize>,
 }
 
@@ -70,9 +83,11 @@ pub struct Blended {
     /// One per waypoint but the last.
     pub corners: Vec<Corner>,
     /// Per waypoint, the index of the sample at the end of its leg: at a
-    /// stop (and the last waypoint), the sample commanding it.
+    /// stop (and the last waypoint), the sample commanding it; at a corner
+    /// passed through, the sample where its transition ends.
     pub at: Vec<usize>,
-    /// Per waypoint, the index of the first sample its leg moves.
+    /// Per waypoint, the index of the first sample its leg moves (the
+    /// transition into it included).
     pub starts: Vec<usize>,
 }
 
@@ -83,19 +98,24 @@ impl Blended {
     }
 
     /// The waypoint whose leg sample `i` belongs to: the last leg started
-    /// by then (in an overlap, the later of the two).
+    /// by then (in a transition, the leg it joins).
     pub fn leg_at(&self, i: usize) -> usize {
         self.starts.partition_point(|&s| s <= i).saturating_sub(1)
     }
 
-    /// The blended corner (overlap > 0) whose samples include sample `i`,
-    /// else the blended corner nearest it: the one to make a stop when
-    /// sample `i` fails a check. `None` when no corner is blended.
+    /// Whether sample `i` was shaped by a transition.
+    pub fn shaped(&self, i: usize) -> bool {
+        self.corners.iter().any(|c| c.samples.contains(&i))
+    }
+
+    /// The blended corner (saved > 0) whose samples include sample `i`,
+    /// else the blended corner nearest it: the one to cap or make a stop
+    /// when sample `i` fails a check. `None` when no corner is blended.
     pub fn corner_near(&self, i: usize) -> Option<usize> {
         self.corners
             .iter()
             .enumerate()
-            .filter(|(_, c)| c.overlap > 0.0)
+            .filter(|(_, c)| c.saved > 0.0)
             .min_by_key(|(_, c)| {
                 if c.samples.contains(&i) {
                     0
@@ -107,36 +127,24 @@ impl Blended {
     }
 }
 
-/// One leg: a rest-to-rest move, placed in time.
+/// One leg: a rest-to-rest move from `from` to `to`, in its own time.
 struct Leg {
-    start: f64,
     from: Joints,
     to: Joints,
     trajectory: Trajectory<DOF>,
     duration: f64,
 }
 
-/// Position displacement, velocity, acceleration and jerk of a leg at
-/// global time `t` (zero motion outside it; the whole displacement after).
-fn leg_state(leg: &Leg, t: f64) -> [Joints; 4] {
-    let tau = t - leg.start;
-    if tau <= 0.0 {
-        return [[0.0; DOF]; 4];
-    }
-    if tau >= leg.duration {
-        let mut d = [0.0; DOF];
-        for (j, d) in d.iter_mut().enumerate() {
-            *d = leg.to[j] - leg.from[j];
-        }
-        return [d, [0.0; DOF], [0.0; DOF], [0.0; DOF]];
-    }
+/// Position, velocity, acceleration and jerk of `trajectory` at its own
+/// time `t`.
+fn state(trajectory: &Trajectory<DOF>, t: f64) -> [Joints; 4] {
     let mut p = DataArrayOrVec::Stack([0.0; DOF]);
     let mut v = DataArrayOrVec::Stack([0.0; DOF]);
     let mut a = DataArrayOrVec::Stack([0.0; DOF]);
     let mut jk = DataArrayOrVec::Stack([0.0; DOF]);
     let mut section = None;
-    leg.trajectory.at_time(
-        tau,
+    trajectory.at_time(
+        t,
         &mut Some(&mut p),
         &mut Some(&mut v),
         &mut Some(&mut a),
@@ -145,7 +153,7 @@ fn leg_state(leg: &Leg, t: f64) -> [Joints; 4] {
     );
     let mut out = [[0.0; DOF]; 4];
     for j in 0..DOF {
-        out[0][j] = p[j] - leg.from[j];
+        out[0][j] = p[j];
         out[1][j] = v[j];
         out[2][j] = a[j];
         out[3][j] = jk[j];
@@ -153,7 +161,7 @@ fn leg_state(leg: &Leg, t: f64) -> [Joints; 4] {
     out
 }
 
-/// The rest-to-rest leg from `from` to `to` (not yet placed in time).
+/// The rest-to-rest leg from `from` to `to`.
 fn leg(
     otg: &mut Ruckig<DOF, ThrowErrorHandler>,
     input: &mut InputParameter<DOF>,
@@ -163,7 +171,6 @@ fn leg(
 ) -> Result<Leg, SmoothingError> {
     let trajectory = rest_to_rest(otg, input, from, to, waypoint)?;
     Ok(Leg {
-        start: 0.0,
         from,
         to,
         duration: trajectory.get_duration(),
@@ -171,55 +178,42 @@ fn leg(
     })
 }
 
-/// The times (global) at which a leg's jerk changes: its profiles' phase
+/// The times at which a trajectory's jerk changes: its profiles' phase
 /// boundaries, for every joint.
-fn breakpoints(leg: &Leg, into: &mut Vec<f64>) {
-    for section in leg.trajectory.get_profiles() {
+fn breakpoints(trajectory: &Trajectory<DOF>, into: &mut Vec<f64>) {
+    for section in trajectory.get_profiles() {
         for p in section.iter() {
-            let offset = leg.start + p.brake.duration;
-            into.push(leg.start);
+            let offset = p.brake.duration;
             into.push(offset);
             into.extend(p.t_sum.iter().map(|t| offset + t));
         }
     }
 }
 
-/// Whether the sum of legs `a` and `b` keeps every limit from `from` to
-/// `to` (global seconds), exactly: between consecutive phase boundaries of
-/// either leg both jerks are constant, so the summed jerk is checked
-/// inside, the acceleration (linear) at both ends, and the velocity
-/// (quadratic) at both ends and where the acceleration crosses zero.
-fn overlap_ok(limits: &[Limits; DOF], a: &Leg, b: &Leg, from: f64, to: f64) -> bool {
-    let mut times = vec![from, to];
-    breakpoints(a, &mut times);
-    breakpoints(b, &mut times);
-    times.retain(|t| *t >= from && *t <= to);
+/// Whether `trajectory` keeps every limit over its whole duration,
+/// exactly: between consecutive phase boundaries the jerk is constant, so
+/// it is checked inside, the acceleration (linear) at both ends, and the
+/// velocity (quadratic) at both ends and where the acceleration crosses
+/// zero; the position at the boundaries.
+fn keeps_limits(limits: &[Limits; DOF], trajectory: &Trajectory<DOF>) -> bool {
+    let duration = trajectory.get_duration();
+    let mut times = vec![0.0, duration];
+    breakpoints(trajectory, &mut times);
+    times.retain(|t| *t >= 0.0 && *t <= duration);
     times.sort_by(f64::total_cmp);
     times.dedup_by(|x, y| (*x - *y).abs() < 1e-12);
-    // Summed state: position, velocity, acceleration, jerk per joint.
-    let sum = |t: f64| -> [Joints; 4] {
-        let (sa, sb) = (leg_state(a, t), leg_state(b, t));
-        let mut out = [[0.0; DOF]; 4];
-        for j in 0..DOF {
-            out[0][j] = a.from[j] + sa[0][j] + sb[0][j];
-            for d in 1..4 {
-                out[d][j] = sa[d][j] + sb[d][j];
-            }
-        }
-        out
-    };
+    let at = |t: f64| state(trajectory, t);
     let ok = |x: f64, max: f64| x.abs() <= max * (1.0 + SLACK);
-    let mut previous = sum(times[0]);
+    let mut previous = at(times[0]);
     for w in times.windows(2) {
         let (t0, t1) = (w[0], w[1]);
-        let next = sum(t1);
-        let inside = sum(0.5 * (t0 + t1));
+        let next = at(t1);
+        let inside = at(0.5 * (t0 + t1));
         for (j, l) in limits.iter().enumerate() {
             let (a0, a1) = (previous[2][j], next[2][j]);
             let turn = if a0 * a1 < 0.0 {
                 // The velocity's extremum inside the phase.
-                let at = t0 + (t1 - t0) * a0 / (a0 - a1);
-                sum(at)[1][j]
+                at(t0 + (t1 - t0) * a0 / (a0 - a1))[1][j]
             } else {
                 0.0
             };
@@ -241,10 +235,58 @@ fn overlap_ok(limits: &[Limits; DOF], a: &Leg, b: &Leg, from: f64, to: f64) -> b
     true
 }
 
+/// How far a transition may end from the state it was asked for
+/// (position rad, velocity rad/s, acceleration rad/s²) before it is
+/// refused: a jump at the join of `e` in position shows in the commands'
+/// third difference as a jerk of `e / CONTROL_PERIOD³` (1.25e8 e), so the
+/// join must be exact to rounding for the commands to keep the limits.
+const JOIN_TOLERANCE: [f64; 3] = [1e-14, 1e-12, 1e-10];
+
+/// The time-optimal trajectory from state `from` to state `to` (position,
+/// velocity, acceleration), time-synchronised, when Ruckig finds one
+/// within the limits that lands on `to`.
+fn transition(
+    otg: &mut Ruckig<DOF, ThrowErrorHandler>,
+    input: &mut InputParameter<DOF>,
+    limits: &[Limits; DOF],
+    from: &[Joints; 4],
+    to: &[Joints; 4],
+) -> Option<Trajectory<DOF>> {
+    input.current_position.copy_from_slice(&from[0]);
+    input.current_velocity.copy_from_slice(&from[1]);
+    input.current_acceleration.copy_from_slice(&from[2]);
+    input.target_position.copy_from_slice(&to[0]);
+    input.target_velocity.copy_from_slice(&to[1]);
+    input.target_acceleration.copy_from_slice(&to[2]);
+    let mut trajectory = Trajectory::new(None);
+    match otg.calculate(input, &mut trajectory) {
+        Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => {}
+        _ => return None,
+    }
+    let duration = trajectory.get_duration();
+    if !duration.is_finite() || duration <= 0.0 {
+        return None;
+    }
+    let end = state(&trajectory, duration);
+    let lands = (0..DOF).all(|j| {
+        (0..3).all(|d| (end[d][j] - to[d][j]).abs() <= JOIN_TOLERANCE[d] * to[d][j].abs().max(1.0))
+    });
+
+    (lands && keeps_limits(limits, &trajectory)).then_some(trajectory)
+}
+
+/// A chosen transition at a corner: where it leaves leg `k` and joins leg
+/// `k + 1` (their own times) and its trajectory.
+struct Join {
+    leave: f64,
+    join: f64,
+    trajectory: Trajectory<DOF>,
+}
+
 /// The commands from `start` (at rest) through `waypoints`, stopping at
 /// each waypoint `k` with `stops[k]` (a missing entry is not a stop) and
-/// at the last, passing through the others with the largest overlap that
-/// keeps the limits (module docs).
+/// at the last, passing through the others with the transition that saves
+/// the most time within the limits (module docs).
 ///
 /// Errors as [`smooth_path`](crate::smoothing::smooth_path) does: invalid
 /// limits, a start or waypoint outside them or not finite, a leg Ruckig
@@ -254,6 +296,27 @@ pub fn blend(
     start: Joints,
     waypoints: &[Joints],
     stops: &[bool],
+) -> Result<Blended, SmoothingError> {
+    let caps: Vec<f64> = (0..waypoints.len())
+        .map(|k| {
+            if stops.get(k).copied().unwrap_or(false) {
+                0.0
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    blend_capped(limits, start, waypoints, &caps)
+}
+
+/// [`blend`] with a cap per corner: `caps[k]` (in `[0, 1]`, a missing
+/// entry is 1) is the largest share of the room at waypoint `k` its
+/// transition may use; 0 makes it a stop.
+pub fn blend_capped(
+    limits: [Limits; DOF],
+    start: Joints,
+    waypoints: &[Joints],
+    caps: &[f64],
 ) -> Result<Blended, SmoothingError> {
     let (mut otg, mut input) = ruckig_input(&limits, start)?;
     for (i, w) in waypoints.iter().enumerate() {
@@ -266,115 +329,207 @@ pub fn blend(
         from = *w;
     }
     let dt = CONTROL_PERIOD;
-    // Place the legs in time, corner by corner.
-    let mut overlaps = vec![0.0; legs.len().saturating_sub(1)];
-    let mut previous = 0.0;
-    let stop_at = |i: usize| i + 1 == waypoints.len() || stops.get(i).copied().unwrap_or(false);
-    // A leg leaving or reaching a stop keeps its half next to it straight
-    // (rest-to-rest profiles are symmetric: half the time is half the way).
-    let half = |leg: &Leg, near_stop: bool| {
-        if near_stop {
-            0.5 * leg.duration
-        } else {
-            leg.duration
-        }
-    };
-    for k in 0..overlaps.len() {
-        let (done, next) = legs.split_at_mut(k + 1);
-        let (a, b) = (&done[k], &mut next[0]);
-        let end = a.start + a.duration;
+    let cap = |k: usize| caps.get(k).copied().unwrap_or(1.0).clamp(0.0, 1.0);
+    let stop_at = |k: usize| k + 1 == waypoints.len() || cap(k) <= 0.0;
+    // Transitions: time-synchronised, any boundary state.
+    let (mut free_otg, mut free_input) = ruckig_input(&limits, start)?;
+    free_input.synchronization = Synchronization::Time;
+    let mut joins: Vec<Option<Join>> = Vec::with_capacity(legs.len());
+    // Where the leg in hand was joined (its own time).
+    let mut joined: f64 = 0.0;
+    for k in 0..legs.len().saturating_sub(1) {
+        let (a, b) = (&legs[k], &legs[k + 1]);
         let leaves_stop = k == 0 || stop_at(k - 1);
-        let room = (half(a, leaves_stop) - previous)
-            .min(half(b, stop_at(k + 1)))
-            .max(0.0);
-        let mut chosen = 0.0;
-        if !stop_at(k) && room > dt {
+        let earliest = if leaves_stop {
+            joined.max(MIN_STRAIGHT * a.duration)
+        } else {
+            joined
+        };
+        // A leg reaching a stop keeps its end straight; one passing
+        // through keeps its second half for the next corner.
+        let latest = if stop_at(k + 1) {
+            (1.0 - MIN_STRAIGHT) * b.duration
+        } else {
+            0.5 * b.duration
+        };
+        let (room_a, room_b) = ((a.duration - earliest).max(0.0), latest.max(0.0));
+        let mut best: Option<(f64, Join)> = None;
+        if !stop_at(k) && room_a > dt && room_b > dt {
             for c in 0..CANDIDATES {
-                let o = room * (CANDIDATES - c) as f64 / CANDIDATES as f64;
-                b.start = end - o;
-                if overlap_ok(&limits, a, b, b.start, end) {
-                    chosen = o;
-                    break;
+                let share = cap(k) * (CANDIDATES - c) as f64 / CANDIDATES as f64;
+                let (leave, join) = (a.duration - share * room_a, share * room_b);
+                let Some(trajectory) = transition(
+                    &mut free_otg,
+                    &mut free_input,
+                    &limits,
+                    &state(&a.trajectory, leave),
+                    &state(&b.trajectory, join),
+                ) else {
+                    continue;
+                };
+                let saved = (a.duration - leave) + join - trajectory.get_duration();
+                if saved > dt && best.as_ref().is_none_or(|(s, _)| saved > *s) {
+                    best = Some((
+                        saved,
+                        Join {
+                            leave,
+                            join,
+                            trajectory,
+                        },
+                    ));
                 }
             }
         }
-        b.start = if chosen > 0.0 {
-            end - chosen
-        } else {
-            // At rest, on a control cycle.
-            (end / dt - 1e-9).ceil().max(0.0) * dt
-        };
-        overlaps[k] = chosen;
-        previous = chosen;
+        joined = best.as_ref().map_or(0.0, |(_, j)| j.join);
+        joins.push(best.map(|(_, j)| j));
     }
-    // Sample.
-    let end = legs.last().map_or(0.0, |l| l.start + l.duration);
+    sample(start, waypoints, &legs, &joins)
+}
+
+/// One stretch of the commands, in global time from `begin` to `end`.
+enum Piece<'l> {
+    /// Leg `k` from its own time `from` on.
+    Leg { k: usize, from: f64 },
+    /// At rest at waypoint `k` (a stop, until the next control cycle).
+    Rest { k: usize },
+    /// The transition at corner `k`.
+    Join { trajectory: &'l Trajectory<DOF> },
+}
+
+/// Samples the legs and their joins every control cycle.
+fn sample(
+    start: Joints,
+    waypoints: &[Joints],
+    legs: &[Leg],
+    joins: &[Option<Join>],
+) -> Result<Blended, SmoothingError> {
+    let dt = CONTROL_PERIOD;
+    // The pieces, each with its global start and end.
+    let mut pieces: Vec<(f64, f64, Piece)> = Vec::with_capacity(3 * legs.len());
+    // Per leg, the global time its leg (or the transition into it) starts,
+    // and where it ends (a stop) or where the transition out of it ends.
+    let mut starts_at = Vec::with_capacity(legs.len());
+    let mut ends_at = Vec::with_capacity(legs.len());
+    let mut corner_times = Vec::with_capacity(joins.len());
+    let mut t = 0.0;
+    let mut entered = 0.0;
+    for (k, l) in legs.iter().enumerate() {
+        if k == 0 {
+            starts_at.push(0.0);
+        }
+        let leave = joins
+            .get(k)
+            .and_then(|j| j.as_ref())
+            .map_or(l.duration, |j| j.leave);
+        let stretch = (leave - entered).max(0.0);
+        pieces.push((t, t + stretch, Piece::Leg { k, from: entered }));
+        t += stretch;
+        match joins.get(k) {
+            Some(Some(j)) => {
+                let d = j.trajectory.get_duration();
+                starts_at.push(t);
+                pieces.push((
+                    t,
+                    t + d,
+                    Piece::Join {
+                        trajectory: &j.trajectory,
+                    },
+                ));
+                corner_times.push(Some((t, t + d)));
+                t += d;
+                ends_at.push(t);
+                entered = j.join;
+            }
+            Some(None) => {
+                // At rest, the next leg starting on a control cycle.
+                ends_at.push(t);
+                let resume = (t / dt - 1e-9).ceil().max(0.0) * dt;
+                pieces.push((t, resume, Piece::Rest { k }));
+                t = resume;
+                starts_at.push(t);
+                corner_times.push(None);
+                entered = 0.0;
+            }
+            None => ends_at.push(t),
+        }
+    }
+    let end = t;
     let count = if legs.is_empty() {
         0
     } else {
         ((end / dt - 1e-9).ceil() as usize).max(1)
     };
     let mut samples = Vec::with_capacity(count);
-    let mut completed = 0;
+    let mut piece = 0;
     for i in 1..=count {
         let t = i as f64 * dt;
-        while completed < legs.len() && legs[completed].start + legs[completed].duration <= t {
-            completed += 1;
+        while piece + 1 < pieces.len() && pieces[piece].1 < t - 1e-12 {
+            piece += 1;
         }
-        let mut q = if completed == 0 {
-            start
-        } else {
-            legs[completed - 1].to
-        };
-        for l in legs[completed..].iter().take(2) {
-            let [d, ..] = leg_state(l, t);
-            for j in 0..DOF {
-                q[j] += d[j];
+        let (begin, _, ref p) = pieces[piece];
+        let q = match *p {
+            Piece::Leg { k, from } => {
+                let local = from + (t - begin);
+                let l = &legs[k];
+                if local >= l.duration - 1e-12 {
+                    l.to
+                } else if local <= 1e-12 {
+                    l.from
+                } else {
+                    state(&l.trajectory, local)[0]
+                }
             }
+            Piece::Rest { k } => waypoints[k],
+            Piece::Join { trajectory } => {
+                state(trajectory, (t - begin).min(trajectory.get_duration()))[0]
+            }
+        };
+        if q.iter().any(|v| !v.is_finite()) {
+            return Err(SmoothingError::NonFiniteOutput {
+                from: start,
+                to: waypoints.last().copied().unwrap_or(start),
+            });
         }
         samples.push(q);
     }
     if let (Some(last), Some(w)) = (samples.last_mut(), waypoints.last()) {
         *last = *w;
     }
-    let corners = overlaps
+    let index_after = |g: f64| (((g / dt) + 1e-9).floor() as usize).min(count.saturating_sub(1));
+    let index_at = |g: f64| {
+        (((g / dt) - 1e-9).ceil().max(1.0) as usize)
+            .min(count)
+            .saturating_sub(1)
+    };
+    let corners = corner_times
         .iter()
         .enumerate()
-        .map(|(k, &overlap)| {
-            if overlap <= 0.0 {
+        .map(|(k, times)| {
+            let (Some((g0, g1)), Some(Some(j))) = (times, joins.get(k)) else {
                 return Corner {
-                    overlap: 0.0,
+                    saved: 0.0,
                     miss: 0.0,
                     samples: 0..0,
                 };
-            }
-            let b = &legs[k + 1];
-            let first = ((b.start / dt).floor() as usize).saturating_sub(1);
-            let end = (((legs[k].start + legs[k].duration) / dt).ceil() as usize).min(count);
+            };
+            let a = &legs[k];
+            let saved = (a.duration - j.leave) + j.join - (g1 - g0);
+            let first = index_after(*g0).saturating_sub(1);
+            let end = (index_at(*g1) + 2).min(count);
             let w = waypoints[k];
             let miss = samples[first.min(end)..end]
                 .iter()
-                .map(|q| (0..DOF).map(|j| (q[j] - w[j]).abs()).fold(0.0, f64::max))
+                .map(|q| (0..DOF).map(|n| (q[n] - w[n]).abs()).fold(0.0, f64::max))
                 .fold(f64::INFINITY, f64::min);
             Corner {
-                overlap,
+                saved,
                 miss: if miss.is_finite() { miss } else { 0.0 },
                 samples: first..end,
             }
         })
         .collect();
-    let at = legs
-        .iter()
-        .map(|l| {
-            let i = ((l.start + l.duration) / dt - 1e-9).ceil().max(1.0) as usize;
-            i.min(count).saturating_sub(1)
-        })
-        .collect();
-    // Sample i is at (i + 1) dt: the first after a leg's start.
-    let starts = legs
-        .iter()
-        .map(|l| ((l.start / dt + 1e-9).floor() as usize).min(count.saturating_sub(1)))
-        .collect();
+    let at = ends_at.iter().map(|&g| index_at(g)).collect();
+    let starts = starts_at.iter().map(|&g| index_after(g)).collect();
     Ok(Blended {
         samples,
         corners,

@@ -70,7 +70,7 @@ fn stopping_everywhere_is_what_smooth_path_commands() {
         stopped
             .corners
             .iter()
-            .all(|c| c.overlap == 0.0 && c.miss == 0.0)
+            .all(|c| c.saved == 0.0 && c.miss == 0.0)
     );
 }
 
@@ -101,13 +101,13 @@ fn passing_through_is_faster_and_within_limits() {
     // waypoint.
     assert!(blended.samples.contains(&waypoints[1]));
     assert_eq!(blended.samples.last(), Some(&waypoints[5]));
-    assert_eq!(blended.corners[1].overlap, 0.0);
+    assert_eq!(blended.corners[1].saved, 0.0);
     // Corners passed through are blended where the limits allow (where a
     // joint goes on the same way, the legs' jerk phases cannot overlap),
     // and say how close they pass.
     let passed: Vec<usize> = [0, 2, 3, 4]
         .into_iter()
-        .filter(|&k| blended.corners[k].overlap > 0.0)
+        .filter(|&k| blended.corners[k].saved > 0.0)
         .collect();
     assert!(!passed.is_empty(), "blended corners: {passed:?}");
     for k in passed {
@@ -166,7 +166,7 @@ proptest! {
         for (k, w) in waypoints.iter().enumerate().take(waypoints.len() - 1) {
             if stops[k] {
                 prop_assert!(blended.samples.contains(w), "stop {} not commanded", k);
-                prop_assert_eq!(blended.corners[k].overlap, 0.0);
+                prop_assert_eq!(blended.corners[k].saved, 0.0);
             }
         }
         prop_assert!(blended.samples.len() <= stopped.samples.len());

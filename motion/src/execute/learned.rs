@@ -401,9 +401,11 @@ impl<W: World> Learned<'_, W> {
         .leaving_support()
     }
 
-    /// Backs off straight up to the height of `above` (the learned "above
-    /// the slot" sub-goal) from the released product `name`.
-    fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<(), Failure> {
+    /// The checked way straight up to the height of `above` (the learned
+    /// "above the slot" sub-goal) from the released product `name`, not
+    /// sent: it is sent with the next product's hover (or alone at the end
+    /// of the run).
+    fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<Leg, Failure> {
         let started = self.station.begin();
         let load = Load::ignoring(name);
         // The released product where it lies (its last observed place was
@@ -440,7 +442,7 @@ impl<W: World> Learned<'_, W> {
             }
         };
         self.station.spend(1, started)?;
-        self.station.send(&route.samples, Suction::Keep)
+        Ok(Leg::new(route, Suction::Keep, load))
     }
 
     /// The reasoner's decision, timed.
@@ -485,7 +487,9 @@ impl<W: World> Learned<'_, W> {
         }
         let s = task.assignment[row].1;
         self.station.restart_clock();
-        let result = self.manipulate(p, s);
+        let result = self.manipulate(p, s).map(|backup| {
+            self.station.keep_backup(vec![backup], row);
+        });
         self.station.measure(&mut rows[row], p, s);
         let handled = match result {
             // A placing decision that broke the order: the product was
@@ -497,7 +501,10 @@ impl<W: World> Learned<'_, W> {
         judge(&mut rows[row], handled).map_err(Stopped::Failed)
     }
 
-    fn manipulate(&mut self, p: usize, s: usize) -> Result<(), Halt> {
+    /// Picks product `p` and places it in slot `s`, after the kept back-up
+    /// from the product before (blended into the hover): the way back up
+    /// from this release, checked, unsent.
+    fn manipulate(&mut self, p: usize, s: usize) -> Result<Leg, Halt> {
         let task = self.station.task;
         let cell = &task.cell;
         let spec = &task.products[p];
@@ -505,7 +512,9 @@ impl<W: World> Learned<'_, W> {
         let obs = self.station.world.observe();
         self.station.sync_products(&obs);
         let (centre, _) = obs.find(name).ok_or(Failure::Disappeared)?;
-        // The lift is sent with the carry, blended into it.
+        // The back-up before is sent with the hover, and the lift with the
+        // carry, blended into them.
+        let backup = self.station.take_backup();
         let (picked, lift) = self.stage(
             &StagePlan {
                 stage: Stage::Picking,
@@ -516,7 +525,7 @@ impl<W: World> Learned<'_, W> {
                 load: Load::ignoring(name),
                 gripped: Some(spec.size),
             },
-            Vec::new(),
+            backup,
             true,
         )?;
         // Placing: the reasoner sees the held product raised by the lift
@@ -577,8 +586,7 @@ impl<W: World> Learned<'_, W> {
             lift,
             false,
         )?;
-        self.retreat(placed.goals[1], name)?;
-        Ok(())
+        Ok(self.retreat(placed.goals[1], name)?)
     }
 }
 
@@ -630,6 +638,9 @@ pub(super) fn run<W: World>(
     }
     let mut violations = Vec::new();
     let mut collisions = Vec::new();
+    if let Err(Failure::Collision { contact }) = runner.station.flush_backup(&mut rows) {
+        collisions.push(contact);
+    }
     match stop {
         Some(Stopped::Violation(v)) => violations.push(v),
         Some(Stopped::Failed(Failure::Collision { contact })) => collisions.push(contact),

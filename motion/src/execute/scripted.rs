@@ -165,8 +165,10 @@ impl<W: World> Scripted<'_, W> {
         self.station.send_legs(legs, keep_tail)
     }
 
-    /// Picks product `p` and places it in slot `s`.
-    fn manipulate(&mut self, p: usize, s: usize) -> Result<(), Failure> {
+    /// Picks product `p` and places it in slot `s`, after the kept
+    /// back-up from the product before (blended into the hover); the way
+    /// back up from this release, checked, unsent.
+    fn manipulate(&mut self, p: usize, s: usize) -> Result<Vec<Leg>, Failure> {
         let task = self.station.task;
         let spec = &task.products[p];
         let name = spec.name.as_str();
@@ -181,15 +183,18 @@ impl<W: World> Scripted<'_, W> {
         let gripped = Held::under_cup(name, spec.size, cell.suction, Vector3::zeros());
         let lifting = gripped.clone().leaving_support();
         let picking_loads = [free, free, Load::holding(&lifting)];
-        let plan = self.plan_stage(obs.joints, &picking, yaw, picking_loads)?;
+        let from = self.station.backup_end().unwrap_or(obs.joints);
+        let plan = self.plan_stage(from, &picking, yaw, picking_loads)?;
         let pick = StageInfo {
             stage: Stage::Picking,
             feature: centre,
             label: 0,
             height: h,
         };
-        // The lift is sent with the carry, blended into it.
-        let lift = self.run_stage(plan, yaw, picking_loads, Some(pick), Vec::new(), true)?;
+        // The back-up before is sent with the hover, and the lift with the
+        // carry, blended into them.
+        let backup = self.station.take_backup();
+        let lift = self.run_stage(plan, yaw, picking_loads, Some(pick), backup, true)?;
 
         let obs = self.station.world.observe();
         let held = gripped;
@@ -223,8 +228,8 @@ impl<W: World> Scripted<'_, W> {
             suction: Suction::Keep,
         }];
         let plan = self.plan_stage(obs.joints, &up, 0.0, [free; 3])?;
-        self.run_stage(plan, 0.0, [free; 3], None, Vec::new(), false)
-            .map(|_| ())
+        // Kept, to be sent with the next product's hover.
+        self.run_stage(plan, 0.0, [free; 3], None, Vec::new(), true)
     }
 }
 
@@ -269,7 +274,9 @@ pub(super) fn run<W: World>(
                     .decision_us
                     .push(decided.elapsed().as_secs_f64() * 1e6);
                 runner.station.restart_clock();
-                let result = runner.manipulate(p, s);
+                let result = runner.manipulate(p, s).map(|backup| {
+                    runner.station.keep_backup(backup, products.len());
+                });
                 runner.station.measure(&mut report, p, s);
                 if let Err(why) = judge(&mut report, result) {
                     stopped = true;
@@ -280,6 +287,9 @@ pub(super) fn run<W: World>(
             }
         }
         products.push(report);
+    }
+    if let Err(Failure::Collision { contact }) = runner.station.flush_backup(&mut products) {
+        collisions.push(contact);
     }
     runner.station.finish(planner, products, collisions)
 }

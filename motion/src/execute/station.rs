@@ -8,7 +8,7 @@
 //! Invariant: nothing reaches the world that [`checked_blend`] did not
 //! return.
 
-use crate::blend::{Blended, blend};
+use crate::blend::{Blended, blend_capped};
 use crate::collision::{Checker, Held, MAX_STEP, ProductBody};
 use crate::expert::{SubGoal, Suction};
 use crate::rrt::{self, Query, RrtConfig};
@@ -171,6 +171,26 @@ pub(crate) struct Station<'a, W: World> {
     /// When the sub-goal being planned must be done (RRT-Connect stops
     /// searching then).
     pub deadline: Option<Instant>,
+    /// The way back up from the last release, checked but not sent yet.
+    backup: Option<Backup>,
+}
+
+/// The way back up from a release, planned and checked right after it but
+/// not sent: it is sent with the next product's first legs, so that the
+/// arm passes over the slot into the next hover without stopping
+/// ([`Station::keep_backup`]); at the end of a run it is sent alone
+/// ([`Station::flush_backup`]).
+///
+/// Time accounting: a product's clock runs from where the previous
+/// product's release settled to where its own release settles, so the
+/// back-up of product `i` (blended into product `i + 1`'s hover) counts
+/// for product `i + 1`, and the last back-up for the product it follows.
+/// The sum over a run is the whole motion.
+#[derive(Debug, Clone)]
+struct Backup {
+    legs: Vec<Leg>,
+    /// The report row of the product it backs up from.
+    row: usize,
 }
 
 impl<'a, W: World> Station<'a, W> {
@@ -187,7 +207,51 @@ impl<'a, W: World> Station<'a, W> {
             budget: PlanningBudget::default(),
             package_planning: Duration::ZERO,
             deadline: None,
+            backup: None,
         }
+    }
+
+    /// Keeps `legs`, the checked way back up from the release of the
+    /// product in report row `row`, to be sent with the next motion
+    /// ([`Backup`]).
+    pub fn keep_backup(&mut self, legs: Vec<Leg>, row: usize) {
+        self.backup = (!legs.is_empty()).then_some(Backup { legs, row });
+    }
+
+    /// Where the kept back-up leaves the arm.
+    pub fn backup_end(&self) -> Option<Joints> {
+        self.backup.as_ref().and_then(|b| leg_end(&b.legs))
+    }
+
+    /// The kept back-up legs (none when none is kept), to be sent first
+    /// with the next product's legs: its motion is planned from where
+    /// they end.
+    pub fn take_backup(&mut self) -> Vec<Leg> {
+        self.backup.take().map(|b| b.legs).unwrap_or_default()
+    }
+
+    /// Sends a kept back-up alone (the run ends, or stops) and adds its
+    /// planning, motion and lower bound to its product's row in `rows`.
+    pub fn flush_backup(&mut self, rows: &mut [ProductReport]) -> Result<(), Failure> {
+        let Some(Backup { legs, row }) = self.backup.take() else {
+            return Ok(());
+        };
+        self.restart_clock();
+        let sent = self.send_legs(legs, false).map(|_| ());
+        let end = self.world.observe().joints;
+        self.stopped_at(end);
+        let Clock {
+            planning_s,
+            steps,
+            bound_s,
+            ..
+        } = self.restart_clock();
+        if let Some(r) = rows.get_mut(row) {
+            r.planning_s += planning_s;
+            r.execution_s += steps as f64 * self.world.control_period();
+            r.bound_s += bound_s;
+        }
+        sent
     }
 
     /// Starts planning a sub-goal: its deadline is the sooner of its own
@@ -683,10 +747,10 @@ pub fn checked_samples(
 /// The blended 2 ms commands from `start` through `waypoints`, stopping
 /// where `stops` says (and at the last), each checked for collision (the
 /// straight joint segment from the last checked sample, at most 1 degree
-/// on). A corner whose blended commands would collide becomes a stop and
-/// the motion is blended again, so the commands are never less safe than
-/// stopping at every waypoint: when that collides too, this is the
-/// collision.
+/// on). A corner whose blended commands would collide gets a smaller
+/// transition, then becomes a stop, and the motion is blended again, so
+/// the commands are never less safe than stopping at every waypoint: when
+/// that collides too, this is the collision.
 pub fn checked_blend(
     arm: &Arm,
     checker: &Checker,
@@ -697,6 +761,10 @@ pub fn checked_blend(
 ) -> Result<Blended, Unchecked> {
     checked_blend_by(arm, checker, start, waypoints, stops, |_| load)
 }
+
+/// The smallest cap ([`blend_capped`]) a corner whose transition
+/// collides is halved to before it becomes a stop.
+const MIN_CAP: f64 = 0.2;
 
 /// [`checked_blend`] with a load per leg: `load_of(k)` for the leg ending
 /// at waypoint `k`; a sample is checked with its leg's load (in an
@@ -709,18 +777,31 @@ pub fn checked_blend_by<'h>(
     stops: &[bool],
     load_of: impl Fn(usize) -> Load<'h>,
 ) -> Result<Blended, Unchecked> {
-    let mut stops: Vec<bool> = (0..waypoints.len())
-        .map(|k| stops.get(k).copied().unwrap_or(false))
+    let mut caps: Vec<f64> = (0..waypoints.len())
+        .map(|k| {
+            if stops.get(k).copied().unwrap_or(false) {
+                0.0
+            } else {
+                1.0
+            }
+        })
         .collect();
-    // Each round makes one more corner a stop: at most one per waypoint.
+    // Each round halves one corner's cap, and a cap at MIN_CAP or below
+    // makes it a stop: at most four rounds per waypoint.
     loop {
-        let motion = blend(arm.limits, start, waypoints, &stops)
+        let motion = blend_capped(arm.limits, start, waypoints, &caps)
             .map_err(|e| Unchecked::Smoothing(e.to_string()))?;
         let Some((i, hit)) = first_collision(checker, start, &motion, &load_of) else {
             return Ok(motion);
         };
         match motion.corner_near(i) {
-            Some(k) => stops[k] = true,
+            Some(k) => {
+                caps[k] = if caps[k] > MIN_CAP {
+                    caps[k] / 2.0
+                } else {
+                    0.0
+                }
+            }
             None => return Err(Unchecked::Collides(hit)),
         }
     }
