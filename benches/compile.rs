@@ -63,12 +63,15 @@ fn bench(c: &mut Criterion) {
     let roots = [PathBuf::from("large.pack")];
     let (compiled, artifacts) =
         compile(&loader, &roots, &Anywhere).expect("the generated file compiles");
-    assert_eq!(compiled.expanded.demonstrations.len(), 5_000);
+    assert_eq!(
+        compiled.demonstrations().expect("demonstrations").len(),
+        5_000
+    );
     assert_eq!(compiled.expanded.suites[0].cases.len(), 10_000);
     let bytes: usize = artifacts.iter().map(|a| a.bytes.len()).sum();
     eprintln!(
         "artifacts: {} samples, {:.1} MB",
-        compiled.graphs.s,
+        compiled.shape.samples,
         bytes as f64 / 1e6
     );
     let mut group = c.benchmark_group("compile");

@@ -3,7 +3,7 @@
 //! into place; siblings left by killed runs are removed by the next one).
 
 use anyhow::{Context, bail};
-use packwright_compiler::{Artifact, Loader};
+use packwright_compiler::{Artifact, Loader, Output, OutputFile};
 use std::fs;
 use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
@@ -162,6 +162,116 @@ fn replaceable(dir: &Path, marker: &str) -> anyhow::Result<bool> {
     Ok(entries.next().is_none() || dir.join(marker).is_file())
 }
 
+/// A directory being written: files go into a temporary sibling, which
+/// [`AtomicDir::commit`] swaps into place, so that `dir` is never
+/// half-written. Dropped without a commit, the sibling is removed.
+pub struct AtomicDir {
+    dir: PathBuf,
+    tmp: PathBuf,
+    committed: bool,
+}
+
+impl AtomicDir {
+    /// Starts replacing `dir`. An existing `dir` is replaced only if it is
+    /// empty or holds `marker` (the file every earlier output of the same
+    /// command has).
+    pub fn begin(dir: &Path, marker: &str) -> anyhow::Result<AtomicDir> {
+        recover_interrupted(dir);
+        if dir.exists() {
+            if !dir.is_dir() {
+                bail!("{} exists and is not a directory", dir.display());
+            }
+            if !replaceable(dir, marker)? {
+                bail!(
+                    "refusing to replace {}: it is not empty and holds no {marker} from an earlier run",
+                    dir.display()
+                );
+            }
+        }
+        if let Some(parent) = dir.parent().filter(|p| !p.as_os_str().is_empty()) {
+            fs::create_dir_all(parent)
+                .with_context(|| format!("cannot create {}", parent.display()))?;
+        }
+        remove_stale_siblings(dir);
+        let tmp = sibling(dir, "tmp");
+        let _ = fs::remove_dir_all(&tmp);
+        fs::create_dir(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+        Ok(AtomicDir {
+            dir: dir.to_owned(),
+            tmp,
+            committed: false,
+        })
+    }
+
+    /// Where the file `name` is written before the commit.
+    pub fn path(&self, name: &str) -> PathBuf {
+        self.tmp.join(name)
+    }
+
+    /// Swaps the written directory into place.
+    pub fn commit(mut self) -> anyhow::Result<()> {
+        let dir = &self.dir;
+        if dir.exists() {
+            let old = sibling(dir, "old");
+            let _ = fs::remove_dir_all(&old);
+            fs::rename(dir, &old)
+                .with_context(|| format!("cannot move {} aside", dir.display()))?;
+            if let Err(e) = fs::rename(&self.tmp, dir) {
+                let _ = fs::rename(&old, dir);
+                return Err(e)
+                    .with_context(|| format!("cannot move the new {} into place", dir.display()));
+            }
+            let _ = fs::remove_dir_all(&old);
+        } else {
+            fs::rename(&self.tmp, dir)
+                .with_context(|| format!("cannot move the new {} into place", dir.display()))?;
+        }
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for AtomicDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = fs::remove_dir_all(&self.tmp);
+        }
+    }
+}
+
+/// The compiler's files written into an [`AtomicDir`], each synced when
+/// finished.
+impl Output for AtomicDir {
+    fn create(&self, name: &'static str) -> std::io::Result<Box<dyn OutputFile>> {
+        Ok(Box::new(SyncedFile(fs::File::create(self.path(name))?)))
+    }
+}
+
+struct SyncedFile(fs::File);
+
+impl Write for SyncedFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.write(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.0.flush()
+    }
+}
+
+impl std::io::Seek for SyncedFile {
+    fn seek(&mut self, pos: std::io::SeekFrom) -> std::io::Result<u64> {
+        self.0.seek(pos)
+    }
+}
+
+impl OutputFile for SyncedFile {
+    fn finish(self: Box<Self>) -> std::io::Result<u64> {
+        self.0.sync_all()?;
+        Ok(self.0.metadata()?.len())
+    }
+}
+
 /// Writes the artifacts into `dir`: first into a temporary sibling
 /// directory, then swapped into place, so that `dir` is never half-written.
 /// An existing `dir` is replaced only if it is empty or holds `marker` (the
@@ -171,49 +281,11 @@ pub fn write_dir_atomically(
     artifacts: &[Artifact],
     marker: &str,
 ) -> anyhow::Result<()> {
-    recover_interrupted(dir);
-    if dir.exists() {
-        if !dir.is_dir() {
-            bail!("{} exists and is not a directory", dir.display());
-        }
-        if !replaceable(dir, marker)? {
-            bail!(
-                "refusing to replace {}: it is not empty and holds no {marker} from an earlier run",
-                dir.display()
-            );
-        }
+    let out = AtomicDir::begin(dir, marker)?;
+    for a in artifacts {
+        write_synced(&out.path(a.name), &a.bytes)?;
     }
-    if let Some(parent) = dir.parent().filter(|p| !p.as_os_str().is_empty()) {
-        fs::create_dir_all(parent)
-            .with_context(|| format!("cannot create {}", parent.display()))?;
-    }
-    remove_stale_siblings(dir);
-    let tmp = sibling(dir, "tmp");
-    let _ = fs::remove_dir_all(&tmp);
-    fs::create_dir(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
-    let written = artifacts
-        .iter()
-        .try_for_each(|a| write_synced(&tmp.join(a.name), &a.bytes));
-    if let Err(e) = written {
-        let _ = fs::remove_dir_all(&tmp);
-        return Err(e);
-    }
-    if dir.exists() {
-        let old = sibling(dir, "old");
-        let _ = fs::remove_dir_all(&old);
-        fs::rename(dir, &old).with_context(|| format!("cannot move {} aside", dir.display()))?;
-        if let Err(e) = fs::rename(&tmp, dir) {
-            let _ = fs::rename(&old, dir);
-            let _ = fs::remove_dir_all(&tmp);
-            return Err(e)
-                .with_context(|| format!("cannot move the new {} into place", dir.display()));
-        }
-        let _ = fs::remove_dir_all(&old);
-    } else {
-        fs::rename(&tmp, dir)
-            .with_context(|| format!("cannot move the new {} into place", dir.display()))?;
-    }
-    Ok(())
+    out.commit()
 }
 
 #[cfg(test)]

@@ -43,6 +43,17 @@ fn edit(dir: &Path, name: &str, change: impl FnOnce(&mut Value)) {
     write_json(&path, &value);
 }
 
+/// The first record (line) of the JSON Lines file `name` of `dir`,
+/// changed.
+fn edit_first_line(dir: &Path, name: &str, change: impl FnOnce(&mut Value)) {
+    let path = dir.join(name);
+    let text = fs::read_to_string(&path).expect("read");
+    let (first, rest) = text.split_once('\n').expect("a line");
+    let mut value: Value = serde_json::from_str(first).expect("json");
+    change(&mut value);
+    fs::write(&path, format!("{value}\n{rest}")).expect("written");
+}
+
 /// `graphs.safetensors` of `dir` with `edge_index[0][0]` set to `value`,
 /// everything else (and the metadata) as compiled.
 fn set_first_edge(dir: &Path, value: i64) {
@@ -102,15 +113,15 @@ const CORRUPTIONS: &[Corruption] = &[
         apply: |dir| {
             // Not JSON a number can be: `1e999` overflows, NaN is no
             // JSON at all. Either way the reader must name the field.
-            let path = dir.join("manifest.json");
-            edit(dir, "manifest.json", |v| {
-                v["demonstrations"][0]["start"][1]["at"][0] = serde_json::json!(123456.75);
+            let path = dir.join("demonstrations.jsonl");
+            edit_first_line(dir, "demonstrations.jsonl", |v| {
+                v["start"][1]["at"][0] = serde_json::json!(123456.75);
             });
             let text = fs::read_to_string(&path).expect("read");
             fs::write(&path, text.replacen("123456.75", "1e999", 1)).expect("written");
         },
-        file: "manifest.json",
-        field: "demonstrations[0].start[1].at[0]",
+        file: "demonstrations.jsonl",
+        field: "[0].start[1].at[0]",
         graphs: false,
     },
     Corruption {
@@ -126,7 +137,7 @@ const CORRUPTIONS: &[Corruption] = &[
     },
     Corruption {
         name: "version",
-        apply: |dir| edit(dir, "manifest.json", |v| v["version"] = 2.into()),
+        apply: |dir| edit(dir, "manifest.json", |v| v["version"] = 1.into()),
         file: "manifest.json",
         field: "version",
         graphs: false,
@@ -134,23 +145,23 @@ const CORRUPTIONS: &[Corruption] = &[
     Corruption {
         name: "negative_label",
         apply: |dir| {
-            edit(dir, "manifest.json", |v| {
-                v["demonstrations"][0]["assignment"][0]["label"] = (-1).into();
+            edit_first_line(dir, "demonstrations.jsonl", |v| {
+                v["assignment"][0]["label"] = (-1).into();
             });
         },
-        file: "manifest.json",
-        field: "demonstrations[0].assignment[0].label",
+        file: "demonstrations.jsonl",
+        field: "[0].assignment[0].label",
         graphs: false,
     },
     Corruption {
         name: "label_999",
         apply: |dir| {
-            edit(dir, "manifest.json", |v| {
-                v["demonstrations"][0]["assignment"][0]["label"] = 999.into();
+            edit_first_line(dir, "demonstrations.jsonl", |v| {
+                v["assignment"][0]["label"] = 999.into();
             });
         },
-        file: "manifest.json",
-        field: "demonstrations[0].assignment[0].label",
+        file: "demonstrations.jsonl",
+        field: "[0].assignment[0].label",
         graphs: false,
     },
     Corruption {
@@ -193,12 +204,12 @@ const CORRUPTIONS: &[Corruption] = &[
     Corruption {
         name: "unknown_product",
         apply: |dir| {
-            edit(dir, "manifest.json", |v| {
-                v["demonstrations"][0]["sequence"][1] = "ghost".into();
+            edit_first_line(dir, "demonstrations.jsonl", |v| {
+                v["sequence"][1] = "ghost".into();
             });
         },
-        file: "manifest.json",
-        field: "demonstrations[0].sequence[1]",
+        file: "demonstrations.jsonl",
+        field: "[0].sequence[1]",
         graphs: false,
     },
     Corruption {

@@ -52,7 +52,10 @@ fn every_generated_cell_compiles_cleanly_and_canonically() {
         assert!((4..=10).contains(&g.products.len()), "seed {seed}");
         assert!(g.taught_n == 2 || g.taught_n == 3, "seed {seed}");
         assert!(g.slots.len() >= g.taught_n + 2, "seed {seed}");
-        assert_eq!(c.expanded.demonstrations.len(), g.demonstrations);
+        assert_eq!(
+            c.demonstrations().expect("demonstrations").len(),
+            g.demonstrations
+        );
         assert!(
             (40..=200).contains(&g.demonstrations),
             "seed {seed}: {} demonstrations",
@@ -134,7 +137,7 @@ fn the_suites_measure_what_they_say() {
         assert!(matches!(untaught.len(), 1 | 2), "seed {seed}");
         assert_eq!(g.taught_slots.len() + g.untaught_slots.len(), g.slots.len());
         // The demonstrations never use an untaught slot ...
-        for d in &c.expanded.demonstrations {
+        for d in &c.demonstrations().expect("demonstrations") {
             assert!(
                 d.setup
                     .assignment

@@ -3,7 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 
-pub const SCHEMA_VERSION: u32 = 1;
+/// 2: demonstrations moved out of `manifest.json` into
+/// `demonstrations.jsonl`, combinations into `combinations.jsonl`.
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// The `schema` string of each artifact (for `graphs.safetensors`, the
 /// value of its one metadata key, `schema`): written by `emit`, checked by
@@ -15,7 +17,7 @@ pub mod schema {
     pub const SCENARIOS: &str = "packwright.scenarios";
     /// Carries its version (`SCHEMA_VERSION`): the tensors have no field
     /// for it.
-    pub const GRAPHS: &str = "packwright.graphs/1";
+    pub const GRAPHS: &str = "packwright.graphs/2";
 }
 
 /// `manifest.json`
@@ -27,7 +29,6 @@ pub struct Manifest {
     pub counts: Counts,
     pub tensors: TensorShapes,
     pub demo_blocks: Vec<DemoBlockRecord>,
-    pub demonstrations: Vec<DemonstrationRecord>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -67,9 +68,11 @@ pub struct DemoBlockRecord {
     pub order: Option<String>,
     /// Goal configurations spanned before `keep`.
     pub configurations: u64,
-    pub kept_combinations: Vec<Vec<String>>,
-    /// Combinations left out by `keep`: unseen goal configurations to test on.
-    pub held_out_combinations: Vec<Vec<String>>,
+    /// Combinations `keep` kept (listed in `combinations.jsonl`).
+    pub kept_combinations: usize,
+    /// Combinations left out by `keep`: unseen goal configurations to
+    /// test on (listed in `combinations.jsonl`).
+    pub held_out_combinations: usize,
     pub first_demonstration: usize,
     pub demonstrations: usize,
     pub samples: usize,
@@ -91,6 +94,19 @@ pub struct Assignment {
     pub goal: [f64; 3],
 }
 
+/// One line of `combinations.jsonl`: a combination of a `demos` block's
+/// products, kept for teaching or held out by `keep`. Each block's kept
+/// combinations come first, then its held-out ones, each in
+/// lexicographic order of the listed products.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct CombinationRecord {
+    pub block: String,
+    pub kept: bool,
+    pub products: Vec<String>,
+}
+
+/// One line of `demonstrations.jsonl` (line `i` is demonstration `i`, the
+/// `demo` of the graph samples).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct DemonstrationRecord {
     pub block: String,

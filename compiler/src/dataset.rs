@@ -12,10 +12,12 @@
 //! (`node_mask` 0). Goal = the handled product's slot goal (slot x, slot y,
 //! height / 2).
 
-use crate::expand::{Expanded, Setup};
+use crate::error::Error;
+use crate::expand::{Demonstration, Expanded, Setup};
 use crate::model::Model;
 
-/// Column-major tensors of all samples (row-major flattening, C order).
+/// Tensors of a run of samples (row-major flattening, C order): all of
+/// them ([`build`]) or a chunk ([`build_chunk`]).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Graphs {
     /// Samples.
@@ -51,19 +53,63 @@ pub fn slot_goal(m: &Model, setup: &Setup, entry: usize) -> Option<[f64; 3]> {
     Some([s.at[0], s.at[1], h / 2.0])
 }
 
-pub fn build(m: &Model, ex: &Expanded) -> Graphs {
-    let width = ex
-        .demonstrations
-        .iter()
-        .map(|d| m.inventories[d.setup.inventory].entries.len() - d.setup.missing.len())
-        .max()
-        .unwrap_or(0);
+/// The sizes of the whole dataset, known from the expansion's counts
+/// before any sample is built.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Shape {
+    /// Samples (S): two per product a demonstration handles.
+    pub samples: usize,
+    /// Node columns (M): the most products present in a demonstration.
+    pub width: usize,
+}
+
+impl Shape {
+    pub fn of(ex: &Expanded) -> Shape {
+        Shape {
+            samples: ex.blocks.iter().map(|b| 2 * b.handled).sum(),
+            width: ex.blocks.iter().map(|b| b.most_present).max().unwrap_or(0),
+        }
+    }
+
+    /// E: the chain's edges, both ways.
+    pub fn edges(&self) -> usize {
+        2 * self.width.saturating_sub(1)
+    }
+}
+
+/// `[2, E]`: chain edges both ways, sources `[0..M-1, 1..M]`, targets
+/// `[1..M, 0..M-1]`.
+pub fn edge_index(width: usize) -> Vec<i64> {
+    let low: Vec<i64> = (0..width.saturating_sub(1) as i64).collect();
+    let high: Vec<i64> = low.iter().map(|i| i + 1).collect();
+    [&low[..], &high[..], &high[..], &low[..]].concat()
+}
+
+/// Every sample of the expansion, in memory: for tests and small
+/// datasets (`emit` builds them a chunk at a time with [`build_chunk`]).
+pub fn build(m: &Model, ex: &Expanded) -> Result<Graphs, Error> {
+    let shape = Shape::of(ex);
+    let demos = ex.demonstrations(m).collect::<Result<Vec<_>, _>>()?;
+    let mut g = build_chunk(m, demos.iter().enumerate(), shape.width, 0);
+    g.edge_index = edge_index(shape.width);
+    Ok(g)
+}
+
+/// The samples of `demos` (each with its index among all demonstrations),
+/// numbered from `first_sample`, with `width` node columns; `edge_index`
+/// is left empty.
+pub fn build_chunk<'a>(
+    m: &Model,
+    demos: impl IntoIterator<Item = (usize, &'a Demonstration)>,
+    width: usize,
+    first_sample: usize,
+) -> Graphs {
     let mut g = Graphs {
         m: width,
         ..Graphs::default()
     };
-    for (di, d) in ex.demonstrations.iter().enumerate() {
-        let first = g.s;
+    for (di, d) in demos {
+        let first = first_sample + g.s;
         let setup = &d.setup;
         let inv = &m.inventories[setup.inventory];
         let lift = m.cells[inv.cell].lift;
@@ -109,12 +155,8 @@ pub fn build(m: &Model, ex: &Expanded) -> Graphs {
             );
             state[node] = goal;
         }
-        g.per_demo.push((first, g.s - first));
+        g.per_demo.push((first, first_sample + g.s - first));
     }
-    // Chain edges both ways: sources [0..M-1, 1..M], targets [1..M, 0..M-1].
-    let low: Vec<i64> = (0..width.saturating_sub(1) as i64).collect();
-    let high: Vec<i64> = low.iter().map(|i| i + 1).collect();
-    g.edge_index = [&low[..], &high[..], &high[..], &low[..]].concat();
     g
 }
 

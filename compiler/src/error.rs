@@ -212,6 +212,9 @@ pub enum Error {
     },
     #[error("product `{product}` cannot be both packed by a worker and missing")]
     PackedAndMissing { at: Loc, product: String },
+    /// An output file could not be written (the disk is full, ...).
+    #[error("cannot write `{file}`: {reason}")]
+    Write { file: String, reason: String },
     /// A bug: an artifact could not be serialised.
     #[error("internal error: {what}")]
     Internal { what: String },
@@ -221,6 +224,7 @@ impl Error {
     /// A stable code, documented in the README.
     pub fn code(&self) -> &'static str {
         match self {
+            Error::Write { .. } => "E008",
             Error::Read { .. } => "E009",
             Error::Syntax { error, .. } => error.code(),
             Error::UseMissing { .. } => "E010",
@@ -262,7 +266,7 @@ impl Error {
     /// Where the caret goes; `None` for errors about a whole file.
     pub fn at(&self) -> Option<Loc> {
         match self {
-            Error::Read { .. } | Error::Internal { .. } => None,
+            Error::Read { .. } | Error::Write { .. } | Error::Internal { .. } => None,
             Error::Syntax { at, .. }
             | Error::UseMissing { at, .. }
             | Error::UseCycle { at, .. }
@@ -302,7 +306,7 @@ impl Error {
     /// The short text under the caret.
     pub fn label(&self) -> String {
         match self {
-            Error::Read { .. } | Error::Internal { .. } => String::new(),
+            Error::Read { .. } | Error::Write { .. } | Error::Internal { .. } => String::new(),
             Error::Syntax { error, .. } => error.label(),
             Error::UseMissing { .. } => "this file cannot be read".into(),
             Error::UseCycle { .. } => "this `use` closes the cycle".into(),
@@ -423,6 +427,7 @@ impl Error {
             }
             Error::NotSelected { .. } => "a worker can only pack products the order selects".into(),
             Error::PackedAndMissing { .. } => "remove it from one of the two lists".into(),
+            Error::Write { .. } => "check that the output's disk has room and is writable; nothing was replaced".into(),
             Error::Internal { .. } => "please report this bug with the input that caused it".into(),
         })
     }

@@ -18,13 +18,15 @@ mod error;
 pub mod expand;
 pub mod load;
 pub mod model;
+pub mod output;
 pub mod resolve;
 pub mod source;
 pub mod validate;
 pub mod workspace;
 
-pub use emit::Artifact;
+pub use emit::{Written, file};
 pub use error::Error;
+pub use output::{Artifact, MemoryOutput, Output, OutputFile};
 pub use source::{FileId, Loader, Loc, MemoryLoader, SourceMap};
 pub use workspace::{Anywhere, Workspace};
 
@@ -36,7 +38,21 @@ pub struct Compiled {
     pub sources: SourceMap,
     pub model: model::Model,
     pub expanded: expand::Expanded,
-    pub graphs: dataset::Graphs,
+    /// The dataset's size (its samples are built only when emitted).
+    pub shape: dataset::Shape,
+}
+
+impl Compiled {
+    /// Every demonstration, generated again and held in memory: for tests
+    /// and small files (writers stream them: [`expand::Expanded::demonstrations`]).
+    pub fn demonstrations(&self) -> Result<Vec<expand::Demonstration>, Error> {
+        self.expanded.demonstrations(&self.model).collect()
+    }
+
+    /// Every graph sample, in memory: for tests and small files.
+    pub fn graphs(&self) -> Result<dataset::Graphs, Error> {
+        dataset::build(&self.model, &self.expanded)
+    }
 }
 
 /// A failed compilation: every error found, sorted by place.
@@ -47,9 +63,12 @@ pub struct Failed {
 }
 
 impl Failed {
-    /// True when a file could not be read at all (not a diagnostic in it).
+    /// True when a file could not be read at all, or an output file
+    /// written (not a diagnostic in the input).
     pub fn is_io(&self) -> bool {
-        self.errors.iter().any(|e| matches!(e, Error::Read { .. }))
+        self.errors
+            .iter()
+            .any(|e| matches!(e, Error::Read { .. } | Error::Write { .. }))
     }
 
     pub fn render(&self) -> String {
@@ -91,29 +110,42 @@ pub fn check(
         Ok(x) => x,
         Err(errors) => return Err(fail(loaded.sources, errors)),
     };
-    let graphs = dataset::build(&model, &expanded);
+    let shape = dataset::Shape::of(&expanded);
     Ok(Compiled {
         sources: loaded.sources,
         model,
         expanded,
-        graphs,
+        shape,
     })
 }
 
-/// Checks, then serialises the artifacts.
-pub fn compile(
+/// Checks, then writes the artifacts into `out` (the manifest last).
+pub fn compile_into(
     loader: &dyn Loader,
     roots: &[PathBuf],
     workspace: &dyn Workspace,
-) -> Result<(Compiled, Vec<Artifact>), Failed> {
+    out: &dyn Output,
+) -> Result<(Compiled, Vec<Written>), Failed> {
     let compiled = check(loader, roots, workspace)?;
     match emit::emit(
         &compiled.sources,
         &compiled.model,
         &compiled.expanded,
-        &compiled.graphs,
+        compiled.shape,
+        out,
     ) {
-        Ok(artifacts) => Ok((compiled, artifacts)),
+        Ok(written) => Ok((compiled, written)),
         Err(e) => Err(fail(compiled.sources, vec![e])),
     }
+}
+
+/// Checks, then serialises the artifacts in memory.
+pub fn compile(
+    loader: &dyn Loader,
+    roots: &[PathBuf],
+    workspace: &dyn Workspace,
+) -> Result<(Compiled, Vec<Artifact>), Failed> {
+    let out = MemoryOutput::new();
+    let (compiled, _) = compile_into(loader, roots, workspace, &out)?;
+    Ok((compiled, out.artifacts()))
 }

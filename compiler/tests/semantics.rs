@@ -55,17 +55,17 @@ fn codes(extra: &str) -> Vec<&'static str> {
 fn sample_count_is_configurations_times_repeat_times_n_times_two() {
     let c = ok("demos t for stock5 {\n choose 3 of A, B, C, D, E into g1, g2, g3\n repeat 2\n}\n");
     // C(5,3) = 10 combinations x 3! slot assignments = 60 configurations.
-    assert_eq!(c.expanded.demonstrations.len(), 60 * 2);
-    assert_eq!(c.graphs.s, 60 * 2 * 3 * 2);
-    assert_eq!(c.graphs.m, 5);
-    assert_eq!(c.graphs.edges(), 8);
+    assert_eq!(c.demonstrations().expect("demonstrations").len(), 60 * 2);
+    assert_eq!(c.shape.samples, 60 * 2 * 3 * 2);
+    assert_eq!(c.shape.width, 5);
+    assert_eq!(c.shape.edges(), 8);
 }
 
 #[test]
 fn slot_lists_longer_than_n_give_injective_assignments() {
     let c = ok("demos t for stock5 {\n choose 2 of A, B, C into g1, g2, g3\n}\n");
     // C(3,2) x 3x2 ordered slot pairs.
-    assert_eq!(c.expanded.demonstrations.len(), 18);
+    assert_eq!(c.demonstrations().expect("demonstrations").len(), 18);
 }
 
 #[test]
@@ -76,7 +76,7 @@ fn keep_holds_out_combinations_deterministically() {
     let block = &a.expanded.blocks[0];
     assert_eq!(block.kept.len(), 6);
     assert_eq!(block.held_out.len(), 4);
-    assert_eq!(a.expanded.demonstrations.len(), 6 * 6);
+    assert_eq!(a.demonstrations().expect("demonstrations").len(), 6 * 6);
     for h in &block.held_out {
         assert!(!block.kept.contains(h));
     }
@@ -102,7 +102,7 @@ fn keep_holds_out_combinations_deterministically() {
 #[test]
 fn picking_and_placing_samples_follow_the_definition() {
     let c = ok("order o for stock5 {\n C -> g1\n A -> g3\n}\ndemo d for o {\n sequence A, C\n}\n");
-    let g = &c.graphs;
+    let g = &c.graphs().expect("graphs");
     assert_eq!(g.s, 4);
     let node = |s: usize, n: usize| &g.nodes[(s * g.m + n) * 4..(s * g.m + n) * 4 + 4];
     // Picking A: A at rest, target A's node, label pick.
@@ -127,9 +127,14 @@ fn missing_products_have_no_node_and_are_padded() {
         "demos t for stock5 {\n choose 3 of A, B, C, D, E into g1, g2, g3\n missing 1 to 1\n seed 4\n}\n\
          demos full for stock5 {\n choose 1 of A into g1\n}\n",
     );
-    let g = &c.graphs;
+    let g = &c.graphs().expect("graphs");
     assert_eq!(g.m, 5);
-    for (i, d) in c.expanded.demonstrations.iter().enumerate() {
+    for (i, d) in c
+        .demonstrations()
+        .expect("demonstrations")
+        .iter()
+        .enumerate()
+    {
         let (first, n) = g.per_demo[i];
         let present = 5 - d.setup.missing.len();
         assert_eq!(n, d.sequence.len() * 2);
@@ -144,8 +149,8 @@ fn missing_products_have_no_node_and_are_padded() {
         assert!(d.sequence.iter().all(|e| !d.setup.missing.contains(e)));
     }
     assert!(
-        c.expanded
-            .demonstrations
+        c.demonstrations()
+            .expect("demonstrations")
             .iter()
             .any(|d| d.setup.missing.len() == 1)
     );
@@ -161,7 +166,7 @@ fn sequence_modes() {
     );
     let seq = |block: usize| {
         let b = &c.expanded.blocks[block];
-        c.expanded.demonstrations[b.first_demo..b.first_demo + b.demos]
+        c.demonstrations().expect("demonstrations")[b.first_demo..b.first_demo + b.demos]
             .iter()
             .map(|d| d.sequence.clone())
             .collect::<Vec<_>>()
@@ -310,4 +315,49 @@ fn geometry_checks() {
         ),
         ["E037"]
     );
+}
+
+/// The streamed artifacts say what the demonstrations held in memory say:
+/// `graphs.safetensors` written a chunk at a time (here more than one
+/// chunk, with missing products so rows differ in width) equals the
+/// `safetensors` crate's serialisation of every sample built at once, and
+/// `demonstrations.jsonl` has one line per demonstration with its samples.
+#[test]
+fn streamed_artifacts_equal_the_dataset_built_in_memory() {
+    use packwright_compiler::artifact::DemonstrationRecord;
+    use packwright_compiler::{MemoryOutput, emit, file};
+    let c = ok(
+        "demos t for stock5 {\n choose 3 of A, B, C, D, E into g1, g2, g3, g4\n missing 0 to 1\n repeat 5\n seed 9\n}\n",
+    );
+    let demos = c.demonstrations().expect("demonstrations");
+    assert_eq!(demos.len(), 10 * 24 * 5);
+    assert!(demos.len() > emit::CHUNK);
+    let out = MemoryOutput::new();
+    emit::emit(&c.sources, &c.model, &c.expanded, c.shape, &out).expect("emitted");
+    let artifacts = out.artifacts();
+    let bytes = |name: &str| {
+        artifacts
+            .iter()
+            .find(|a| a.name == name)
+            .map(|a| a.bytes.clone())
+            .expect(name)
+    };
+    let g = c.graphs().expect("graphs");
+    assert_eq!(g.s, c.shape.samples);
+    assert_eq!(
+        bytes(file::GRAPHS),
+        emit::graphs_bytes(&g).expect("serialised")
+    );
+    let lines = bytes(file::DEMONSTRATIONS);
+    let records: Vec<DemonstrationRecord> = lines
+        .split(|&b| b == b'\n')
+        .filter(|l| !l.is_empty())
+        .map(|l| serde_json::from_slice(l).expect("a record"))
+        .collect();
+    assert_eq!(records.len(), demos.len());
+    for (i, (r, d)) in records.iter().zip(&demos).enumerate() {
+        assert_eq!((r.first_sample, r.samples), g.per_demo[i]);
+        assert_eq!(r.missing.len(), d.setup.missing.len());
+        assert_eq!(r.sequence.len(), d.sequence.len());
+    }
 }

@@ -894,7 +894,10 @@ mod tests {
                 Ok(c) => c,
                 Err(failed) => panic!("seed {seed}:\n{}\n{}", failed.render(), g.text),
             };
-            assert_eq!(compiled.expanded.demonstrations.len(), g.demonstrations);
+            assert_eq!(
+                compiled.demonstrations().expect("demonstrations").len(),
+                g.demonstrations
+            );
             let names: Vec<&str> = compiled
                 .expanded
                 .suites

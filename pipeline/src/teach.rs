@@ -80,8 +80,8 @@ impl Lesson {
                 ),
             });
         }
-        let chosen: Vec<DemonstrationRecord> = manifest
-            .demonstrations
+        let chosen: Vec<DemonstrationRecord> = compiled
+            .demonstrations()
             .iter()
             .filter(|d| demos.is_empty() || demos.contains(&d.block))
             .cloned()

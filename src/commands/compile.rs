@@ -3,29 +3,48 @@
 use super::{report_failure, summary_line};
 use crate::Exit;
 use crate::cli::CompileArgs;
-use crate::fsio::{FsLoader, write_dir_atomically};
+use crate::fsio::{AtomicDir, FsLoader};
 use packwright_pipeline::reach::RobotWorkspace;
 
 pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
-    let (compiled, artifacts) =
-        match packwright_compiler::compile(&FsLoader, &args.files, &RobotWorkspace::new()) {
-            Ok(ok) => ok,
-            Err(failed) => return Ok(report_failure(&failed, args.json)),
-        };
-    write_dir_atomically(&args.output, &artifacts, "manifest.json")?;
+    let compiled = match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new())
+    {
+        Ok(ok) => ok,
+        Err(failed) => return Ok(report_failure(&failed, args.json)),
+    };
+    // Checked before anything is written; then the artifacts are streamed
+    // into a temporary sibling of the output, swapped in when complete.
+    let out = AtomicDir::begin(&args.output, packwright_compiler::file::MANIFEST)?;
+    let written = match packwright_compiler::emit::emit(
+        &compiled.sources,
+        &compiled.model,
+        &compiled.expanded,
+        compiled.shape,
+        &out,
+    ) {
+        Ok(written) => written,
+        Err(e) => {
+            let failed = packwright_compiler::Failed {
+                sources: compiled.sources,
+                errors: vec![e],
+            };
+            return Ok(report_failure(&failed, args.json));
+        }
+    };
+    out.commit()?;
     if args.json {
-        let files: Vec<_> = artifacts
+        let files: Vec<_> = written
             .iter()
-            .map(|a| serde_json::json!({"name": a.name, "bytes": a.bytes.len()}))
+            .map(|w| serde_json::json!({"name": w.name, "bytes": w.bytes}))
             .collect();
         outln!(
             "{}",
             serde_json::json!({
                 "output": args.output.display().to_string(),
                 "files": files,
-                "demonstrations": compiled.expanded.demonstrations.len(),
-                "samples": compiled.graphs.s,
-                "nodes": compiled.graphs.m,
+                "demonstrations": compiled.expanded.demonstration_count(),
+                "samples": compiled.shape.samples,
+                "nodes": compiled.shape.width,
                 "scenarios": compiled.expanded.suites.iter().map(|s| s.cases.len()).sum::<usize>(),
             })
         );

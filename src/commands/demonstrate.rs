@@ -11,16 +11,16 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
     let compiled = CompiledDir::read(&args.dir)?;
-    let (manifest, world) = (compiled.manifest(), compiled.world());
-    if manifest.demonstrations.is_empty() {
+    let (demonstrations, world) = (compiled.demonstrations(), compiled.world());
+    if demonstrations.is_empty() {
         bail!(
             "{} holds no demonstrations: compile files with `demo` or `demos` blocks",
             args.dir.display()
         );
     }
-    let total = manifest.demonstrations.len();
+    let total = demonstrations.len();
     let done = AtomicUsize::new(0);
-    let demos: Vec<_> = manifest.demonstrations.iter().collect();
+    let demos: Vec<_> = demonstrations.iter().collect();
     let logs = replay_all(world, &demos, &|| {
         let n = done.fetch_add(1, Ordering::Relaxed) + 1;
         if !args.json && (n.is_multiple_of(10) || n == total) {
@@ -52,7 +52,9 @@ pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
             log.actions.len()
         );
         if !failed.is_empty() {
-            outln!("could not replay demonstrations {failed:?} (indices into manifest.json)");
+            outln!(
+                "could not replay demonstrations {failed:?} (lines of demonstrations.jsonl, from 0)"
+            );
         }
     }
     Ok(if failed.is_empty() {

@@ -53,8 +53,8 @@ pub fn summary_line(c: &Compiled) -> String {
         m.products.len(),
         m.inventories.len(),
         m.orders.len(),
-        x.demonstrations.len(),
-        c.graphs.s,
+        x.demonstration_count(),
+        c.shape.samples,
         x.suites.iter().map(|s| s.cases.len()).sum::<usize>(),
         x.suites.len(),
     )

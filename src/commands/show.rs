@@ -20,6 +20,14 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
     // anything is shown.
     let compiled = CompiledDir::read(&args.dir)?;
     let graphs = compiled.graphs()?;
+    let combinations = compiled.combinations()?;
+    let held_out = |block: &str| -> Vec<Vec<String>> {
+        combinations
+            .iter()
+            .filter(|c| c.block == block && !c.kept)
+            .map(|c| c.products.clone())
+            .collect()
+    };
     let (manifest, labels, world, scenarios) = (
         compiled.manifest(),
         compiled.labels(),
@@ -50,8 +58,8 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
             "orders": world.orders,
             "demo_blocks": manifest.demo_blocks.iter().map(|b| serde_json::json!({
                 "name": b.name, "kind": b.kind, "cell": b.cell, "inventory": b.inventory, "order": b.order,
-                "configurations": b.configurations, "kept_combinations": b.kept_combinations.len(),
-                "held_out_combinations": b.held_out_combinations, "demonstrations": b.demonstrations, "samples": b.samples,
+                "configurations": b.configurations, "kept_combinations": b.kept_combinations,
+                "held_out_combinations": held_out(&b.name), "demonstrations": b.demonstrations, "samples": b.samples,
             })).collect::<Vec<_>>(),
             "graphs_sha256": graphs_sha,
             "tensors": tensors.iter().map(|(name, dtype, shape)| serde_json::json!({"name": name, "dtype": dtype, "shape": shape})).collect::<Vec<_>>(),
@@ -150,8 +158,8 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
         let kept = if b.kind == "demos" {
             format!(
                 ", combinations kept {}/{}",
-                b.kept_combinations.len(),
-                b.kept_combinations.len() + b.held_out_combinations.len()
+                b.kept_combinations,
+                b.kept_combinations + b.held_out_combinations
             )
         } else {
             String::new()
@@ -166,13 +174,21 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
             b.demonstrations,
             b.samples
         )?;
-        if !b.held_out_combinations.is_empty() {
-            let held: Vec<String> = b
-                .held_out_combinations
+        if b.held_out_combinations > 0 {
+            /// Held-out combinations listed per block (`--json` lists all).
+            const SHOWN: usize = 20;
+            let held: Vec<String> = held_out(&b.name)
                 .iter()
+                .take(SHOWN)
                 .map(|h| h.join(" "))
                 .collect();
-            writeln!(o, "    held out: {}", held.join(", "))?;
+            let more = b.held_out_combinations.saturating_sub(SHOWN);
+            let more = if more > 0 {
+                format!(" and {more} more (combinations.jsonl)")
+            } else {
+                String::new()
+            };
+            writeln!(o, "    held out: {}{more}", held.join(", "))?;
         }
     }
     writeln!(o, "\ngraphs.safetensors  sha256:{}", &graphs_sha[..16])?;

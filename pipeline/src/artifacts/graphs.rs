@@ -146,7 +146,6 @@ pub(super) fn read(c: &CompiledDir, path: &Path, bytes: Vec<u8>) -> Result<Graph
         demo,
         edge_index,
         per_demo: c
-            .manifest
             .demonstrations
             .iter()
             .map(|d| (d.first_sample, d.samples))
@@ -194,7 +193,7 @@ fn check(c: &CompiledDir, path: &Path, g: &Graphs) -> Result<()> {
         }
     };
     let m = g.m;
-    let demos = c.manifest.demonstrations.len();
+    let demos = c.demonstrations.len();
     let (nodes, node_mask, goal) = (
         root.key(tensor::NODES),
         root.key(tensor::NODE_MASK),
@@ -206,7 +205,7 @@ fn check(c: &CompiledDir, path: &Path, g: &Graphs) -> Result<()> {
         root.key(tensor::STAGE),
         root.key(tensor::DEMO),
     );
-    for (d, record) in c.manifest.demonstrations.iter().enumerate() {
+    for (d, record) in c.demonstrations.iter().enumerate() {
         let slots = c
             .world
             .cells
@@ -236,7 +235,7 @@ fn check(c: &CompiledDir, path: &Path, g: &Graphs) -> Result<()> {
                 return Err(differs(
                     &at,
                     value,
-                    format!("{d} (manifest.json gives sample {i} to demonstration {d})"),
+                    format!("{d} (demonstrations.jsonl gives sample {i} to demonstration {d})"),
                 ));
             }
             for j in 0..m {

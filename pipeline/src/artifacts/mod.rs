@@ -2,11 +2,13 @@
 //! reads a compiled directory (`train`, `demonstrate`, `show`).
 //!
 //! [`CompiledDir::read`] parses `manifest.json`, `labels.json`,
-//! `orders.json` and `scenarios.json` and checks them together
+//! `orders.json`, `scenarios.json` and `demonstrations.jsonl` (a record
+//! per line) and checks them together
 //! (`validate`) before anything uses them; [`CompiledDir::graphs`] reads
 //! and checks `graphs.safetensors` against them (`graphs`). A file that
 //! breaks the schema is [`PipelineError::Invalid`]: the file, the field
-//! (a JSON path such as `demonstrations[3].start[1].at`, or a tensor
+//! (a JSON path such as `suites[0].cases[3].start[1].at`; in a JSON
+//! Lines file, the record first: `[3].start[1].at` is line 4; or a tensor
 //! element such as `edge_index[0][2]`) and an [`ArtifactProblem`].
 //!
 //! **The first problem is reported**, in a fixed order: every file's
@@ -31,20 +33,15 @@ pub use graphs::{GraphsFile, layout};
 use crate::error::{ArtifactProblem, PipelineError, Result};
 use field::Field;
 use packwright_compiler::artifact::{
-    LabelsFile, Manifest, SCHEMA_VERSION, ScenariosFile, WorldFile, schema,
+    CombinationRecord, DemonstrationRecord, LabelsFile, Manifest, SCHEMA_VERSION, ScenariosFile,
+    WorldFile, schema,
 };
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
 
 /// The files of a compiled directory.
-pub mod file {
-    pub const MANIFEST: &str = "manifest.json";
-    pub const LABELS: &str = "labels.json";
-    pub const ORDERS: &str = "orders.json";
-    pub const SCENARIOS: &str = "scenarios.json";
-    pub const GRAPHS: &str = "graphs.safetensors";
-}
+pub use packwright_compiler::file;
 
 /// The JSON artifacts of a compiled directory, checked.
 ///
@@ -78,6 +75,7 @@ pub mod file {
 pub struct CompiledDir {
     dir: PathBuf,
     manifest: Manifest,
+    demonstrations: Vec<DemonstrationRecord>,
     labels: LabelsFile,
     world: WorldFile,
     scenarios: ScenariosFile,
@@ -93,7 +91,8 @@ impl CompiledDir {
         let labels = read_artifact(&dir.join(file::LABELS), schema::LABELS)?;
         let world = read_artifact(&dir.join(file::ORDERS), schema::ORDERS)?;
         let scenarios = read_artifact(&dir.join(file::SCENARIOS), schema::SCENARIOS)?;
-        CompiledDir::new(dir, manifest, labels, world, scenarios)
+        let demonstrations = read_lines(&dir.join(file::DEMONSTRATIONS))?;
+        CompiledDir::new(dir, manifest, demonstrations, labels, world, scenarios)
     }
 
     /// The artifacts of `dir` already parsed, checked as [`read`] checks
@@ -103,6 +102,7 @@ impl CompiledDir {
     pub fn new(
         dir: &Path,
         manifest: Manifest,
+        demonstrations: Vec<DemonstrationRecord>,
         labels: LabelsFile,
         world: WorldFile,
         scenarios: ScenariosFile,
@@ -128,6 +128,7 @@ impl CompiledDir {
         let compiled = CompiledDir {
             dir: dir.to_owned(),
             manifest,
+            demonstrations,
             labels,
             world,
             scenarios,
@@ -143,6 +144,20 @@ impl CompiledDir {
 
     pub fn manifest(&self) -> &Manifest {
         &self.manifest
+    }
+
+    /// `demonstrations.jsonl`: demonstration `i` is line `i + 1`.
+    pub fn demonstrations(&self) -> &[DemonstrationRecord] {
+        &self.demonstrations
+    }
+
+    /// `combinations.jsonl`, read and checked against the manifest's
+    /// blocks (each block's kept, then held-out, combinations, of its
+    /// inventory's products, as many as the manifest counts).
+    pub fn combinations(&self) -> Result<Vec<CombinationRecord>> {
+        let combinations = read_lines(&self.dir.join(file::COMBINATIONS))?;
+        validate::combinations(self, &combinations)?;
+        Ok(combinations)
     }
 
     pub fn labels(&self) -> &LabelsFile {
@@ -209,6 +224,39 @@ fn read_artifact<T: DeserializeOwned + Versioned>(path: &Path, expected: &str) -
             Err(malformed)
         }
     }
+}
+
+/// The records of the JSON Lines file at `path`, one per line; an error
+/// names the record (`[i]`, line `i + 1`) and the field in it.
+fn read_lines<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
+    use std::io::BufRead;
+    let file = std::fs::File::open(path).map_err(|e| PipelineError::Read {
+        path: path.to_owned(),
+        reason: e.to_string(),
+    })?;
+    let mut records = Vec::new();
+    for (i, line) in std::io::BufReader::new(file).split(b'\n').enumerate() {
+        let line = line.map_err(|e| PipelineError::Read {
+            path: path.to_owned(),
+            reason: e.to_string(),
+        })?;
+        let record = serde_json::from_slice(&line).map_err(|e| {
+            let inner = json_path::at(&line, e.line(), e.column());
+            PipelineError::Invalid {
+                file: path.to_owned(),
+                field: if inner.is_empty() {
+                    format!("[{i}]")
+                } else {
+                    format!("[{i}].{inner}")
+                },
+                problem: ArtifactProblem::Malformed {
+                    reason: e.to_string(),
+                },
+            }
+        })?;
+        records.push(record);
+    }
+    Ok(records)
 }
 
 fn read_bytes(path: &Path) -> Result<Vec<u8>> {

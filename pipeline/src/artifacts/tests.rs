@@ -47,6 +47,7 @@ scenarios short for pantry5 {
 struct Fixture {
     compiled: Compiled,
     manifest: Manifest,
+    demonstrations: Vec<DemonstrationRecord>,
     labels: LabelsFile,
     world: WorldFile,
     scenarios: ScenariosFile,
@@ -69,6 +70,11 @@ fn fixture() -> Fixture {
     };
     Fixture {
         manifest: serde_json::from_slice(&bytes(file::MANIFEST)).expect("manifest"),
+        demonstrations: bytes(file::DEMONSTRATIONS)
+            .split(|&b| b == b'\n')
+            .filter(|l| !l.is_empty())
+            .map(|l| serde_json::from_slice(l).expect("demonstration"))
+            .collect(),
         labels: serde_json::from_slice(&bytes(file::LABELS)).expect("labels"),
         world: serde_json::from_slice(&bytes(file::ORDERS)).expect("orders"),
         scenarios: serde_json::from_slice(&bytes(file::SCENARIOS)).expect("scenarios"),
@@ -83,6 +89,7 @@ impl Fixture {
         CompiledDir::new(
             Path::new(DIR),
             self.manifest,
+            self.demonstrations,
             self.labels,
             self.world,
             self.scenarios,
@@ -92,18 +99,13 @@ impl Fixture {
     /// `graphs.safetensors` of the fixture's graphs changed by `change`,
     /// read against the fixture's JSON artifacts.
     fn graphs(self, change: impl FnOnce(&mut packwright_compiler::dataset::Graphs)) -> Result<()> {
-        let mut g = self.compiled.graphs.clone();
+        let mut g = self.compiled.graphs().expect("graphs");
         change(&mut g);
-        let c = &self.compiled;
-        let artifacts = emit::emit(&c.sources, &c.model, &c.expanded, &g).expect("emitted");
-        let bytes = artifacts
-            .into_iter()
-            .find(|a| a.name == file::GRAPHS)
-            .map(|a| a.bytes)
-            .expect("graphs");
+        let bytes = emit::graphs_bytes(&g).expect("serialised");
         let dir = CompiledDir::new(
             Path::new(DIR),
             self.manifest,
+            self.demonstrations,
             self.labels,
             self.world,
             self.scenarios,
@@ -144,13 +146,8 @@ fn expect(
 #[test]
 fn a_clean_directory_is_read_from_disk_with_its_graphs() {
     let f = fixture();
-    assert!(f.manifest.demonstrations.len() > 2);
-    assert!(
-        f.manifest
-            .demonstrations
-            .iter()
-            .any(|d| !d.missing.is_empty())
-    );
+    assert!(f.demonstrations.len() > 2);
+    assert!(f.demonstrations.iter().any(|d| !d.missing.is_empty()));
     let dir =
         std::env::temp_dir().join(format!("packwright-artifacts-unit-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -165,22 +162,37 @@ fn a_clean_directory_is_read_from_disk_with_its_graphs() {
     }
     let read = CompiledDir::read(&dir).expect("read");
     assert_eq!(read.manifest(), &f.manifest);
+    assert_eq!(read.demonstrations(), &f.demonstrations[..]);
+    let combinations = read.combinations().expect("combinations");
+    let mixed = &f.manifest.demo_blocks[1];
+    assert_eq!(
+        combinations.len(),
+        mixed.kept_combinations + mixed.held_out_combinations
+    );
+    assert!(
+        combinations
+            .iter()
+            .all(|c| c.block == "mixed" && c.products.len() == 3)
+    );
     let graphs = read.graphs().expect("graphs");
-    assert_eq!(graphs.graphs.s, f.compiled.graphs.s);
-    assert_eq!(graphs.graphs.per_demo, f.compiled.graphs.per_demo);
+    assert_eq!(graphs.graphs.s, f.compiled.shape.samples);
+    assert_eq!(
+        graphs.graphs.per_demo,
+        f.compiled.graphs().expect("graphs").per_demo
+    );
     let names: Vec<&str> = graphs.tensors().iter().map(|t| t.0).collect();
     assert_eq!(names, tensor::ALL);
     std::fs::write(
         dir.join(file::LABELS),
-        b"{\"schema\": \"packwright.labels\", \"version\": 2}",
+        b"{\"schema\": \"packwright.labels\", \"version\": 1}",
     )
     .expect("written");
     expect(CompiledDir::read(&dir), "labels.json", "version", |p| {
         matches!(
             p,
             ArtifactProblem::Version {
-                found: 2,
-                expected: 1
+                found: 1,
+                expected: 2
             }
         )
     });
@@ -207,13 +219,13 @@ fn schemas_and_versions_are_this_packwrights() {
         |p| matches!(p, ArtifactProblem::Schema { found, .. } if found == "packwright.orders"),
     );
     let mut f = fixture();
-    f.scenarios.version = 2;
+    f.scenarios.version = 3;
     expect(f.check(), "scenarios.json", "version", |p| {
         matches!(
             p,
             ArtifactProblem::Version {
-                found: 2,
-                expected: 1
+                found: 3,
+                expected: 2
             }
         )
     });
@@ -249,11 +261,11 @@ fn numbers_are_finite_and_sizes_positive() {
         |p| matches!(p, ArtifactProblem::NotFinite { value } if value.is_nan()),
     );
     let mut f = fixture();
-    f.manifest.demonstrations[1].start[2].at[0] = 1e300;
+    f.demonstrations[1].start[2].at[0] = 1e300;
     expect(
         f.check(),
-        "manifest.json",
-        "demonstrations[1].start[2].at[0]",
+        "demonstrations.jsonl",
+        "[1].start[2].at[0]",
         |p| matches!(p, ArtifactProblem::NotFinite { .. }),
     );
     let mut f = fixture();
@@ -294,19 +306,19 @@ fn numbers_are_finite_and_sizes_positive() {
 #[test]
 fn names_resolve_and_are_unique() {
     let mut f = fixture();
-    f.manifest.demonstrations[0].sequence[1] = "ghost".into();
+    f.demonstrations[0].sequence[1] = "ghost".into();
     expect(
         f.check(),
-        "manifest.json",
-        "demonstrations[0].sequence[1]",
+        "demonstrations.jsonl",
+        "[0].sequence[1]",
         |p| matches!(p, ArtifactProblem::UnknownName { name, .. } if name == "ghost"),
     );
     let mut f = fixture();
-    f.manifest.demonstrations[0].assignment[0].slot = "k9".into();
+    f.demonstrations[0].assignment[0].slot = "k9".into();
     expect(
         f.check(),
-        "manifest.json",
-        "demonstrations[0].assignment[0].slot",
+        "demonstrations.jsonl",
+        "[0].assignment[0].slot",
         |p| {
             matches!(
                 p,
@@ -318,8 +330,8 @@ fn names_resolve_and_are_unique() {
         },
     );
     let mut f = fixture();
-    f.manifest.demonstrations[0].cell = "line3".into();
-    expect(f.check(), "manifest.json", "demonstrations[0].cell", |p| {
+    f.demonstrations[0].cell = "line3".into();
+    expect(f.check(), "demonstrations.jsonl", "[0].cell", |p| {
         matches!(p, ArtifactProblem::UnknownName { .. })
     });
     let mut f = fixture();
@@ -341,14 +353,11 @@ fn names_resolve_and_are_unique() {
         matches!(p, ArtifactProblem::Duplicate { .. })
     });
     let mut f = fixture();
-    let first = f.manifest.demonstrations[0].sequence[0].clone();
-    f.manifest.demonstrations[0].sequence[2] = first;
-    expect(
-        f.check(),
-        "manifest.json",
-        "demonstrations[0].sequence[2]",
-        |p| matches!(p, ArtifactProblem::Duplicate { .. }),
-    );
+    let first = f.demonstrations[0].sequence[0].clone();
+    f.demonstrations[0].sequence[2] = first;
+    expect(f.check(), "demonstrations.jsonl", "[0].sequence[2]", |p| {
+        matches!(p, ArtifactProblem::Duplicate { .. })
+    });
     let mut f = fixture();
     f.world.cells[0].slots[1].box_name = "bin".into();
     expect(f.check(), "orders.json", "cells[0].slots[1].box", |p| {
@@ -359,11 +368,11 @@ fn names_resolve_and_are_unique() {
 #[test]
 fn labels_are_the_slots_labels_in_both_files() {
     let mut f = fixture();
-    f.manifest.demonstrations[0].assignment[0].label = 999;
+    f.demonstrations[0].assignment[0].label = 999;
     expect(
         f.check(),
-        "manifest.json",
-        "demonstrations[0].assignment[0].label",
+        "demonstrations.jsonl",
+        "[0].assignment[0].label",
         |p| matches!(p, ArtifactProblem::Differs { found, .. } if found == "999"),
     );
     let mut f = fixture();
@@ -443,7 +452,7 @@ fn counts_and_sample_ranges_match_what_the_files_hold() {
     );
     let mut f = fixture();
     f.manifest.demo_blocks[0].demonstrations = 2;
-    expect(f.check(), "manifest.json", "demonstrations[1].block", |p| {
+    expect(f.check(), "demonstrations.jsonl", "[1].block", |p| {
         matches!(p, ArtifactProblem::Differs { .. })
     });
     let mut f = fixture();
@@ -455,46 +464,38 @@ fn counts_and_sample_ranges_match_what_the_files_hold() {
         |p| matches!(p, ArtifactProblem::CountMismatch { found: 1000, .. }),
     );
     let mut f = fixture();
-    f.manifest.demonstrations[1].first_sample += 1;
-    expect(
-        f.check(),
-        "manifest.json",
-        "demonstrations[1].first_sample",
-        |p| matches!(p, ArtifactProblem::Differs { .. }),
-    );
+    f.demonstrations[1].first_sample += 1;
+    expect(f.check(), "demonstrations.jsonl", "[1].first_sample", |p| {
+        matches!(p, ArtifactProblem::Differs { .. })
+    });
     let mut f = fixture();
-    f.manifest.demonstrations[0].samples = 4;
+    f.demonstrations[0].samples = 4;
     f.manifest.demo_blocks[0].samples = 4;
-    expect(
-        f.check(),
-        "manifest.json",
-        "demonstrations[0].samples",
-        |p| {
-            matches!(
-                p,
-                ArtifactProblem::CountMismatch {
-                    expected: 6,
-                    found: 4
-                }
-            )
-        },
-    );
+    expect(f.check(), "demonstrations.jsonl", "[0].samples", |p| {
+        matches!(
+            p,
+            ArtifactProblem::CountMismatch {
+                expected: 6,
+                found: 4
+            }
+        )
+    });
     let mut f = fixture();
     f.manifest.tensors.nodes += 1;
     expect(f.check(), "manifest.json", "tensors.nodes", |p| {
         matches!(p, ArtifactProblem::CountMismatch { .. })
     });
     let mut f = fixture();
-    f.manifest.demonstrations[0].start.pop();
-    expect(f.check(), "manifest.json", "demonstrations[0].start", |p| {
+    f.demonstrations[0].start.pop();
+    expect(f.check(), "demonstrations.jsonl", "[0].start", |p| {
         matches!(p, ArtifactProblem::CountMismatch { .. })
     });
     let mut f = fixture();
-    f.manifest.demonstrations[0].start.swap(0, 1);
+    f.demonstrations[0].start.swap(0, 1);
     expect(
         f.check(),
-        "manifest.json",
-        "demonstrations[0].start[0].product",
+        "demonstrations.jsonl",
+        "[0].start[0].product",
         |p| matches!(p, ArtifactProblem::Differs { .. }),
     );
 }
@@ -653,7 +654,7 @@ fn graphs_files_of_another_layout_are_refused() {
 #[test]
 fn messages_name_the_file_and_the_field() {
     let mut f = fixture();
-    f.manifest.demonstrations[0].sequence[1] = "ghost".into();
+    f.demonstrations[0].sequence[1] = "ghost".into();
     let message = f
         .check()
         .map(|_| ())
@@ -662,10 +663,10 @@ fn messages_name_the_file_and_the_field() {
         .unwrap_or_default();
     assert_eq!(
         message,
-        "compiled/manifest.json, demonstrations[0].sequence[1]: no product of the assignment is named `ghost`"
+        "compiled/demonstrations.jsonl, [0].sequence[1]: no product of the assignment is named `ghost`"
     );
     let mut f = fixture();
-    f.manifest.version = 2;
+    f.manifest.version = 1;
     let message = f
         .check()
         .map(|_| ())
@@ -673,7 +674,7 @@ fn messages_name_the_file_and_the_field() {
         .map(|e| e.to_string())
         .unwrap_or_default();
     assert!(
-        message.starts_with("compiled/manifest.json, version: schema version 2"),
+        message.starts_with("compiled/manifest.json, version: schema version 1"),
         "{message}"
     );
     assert!(message.contains("compile"), "{message}");

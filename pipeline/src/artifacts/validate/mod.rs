@@ -20,11 +20,22 @@ pub(super) fn all(c: &CompiledDir) -> Result<()> {
     labels(&Check::of(c, file::LABELS), &c.labels, &world)?;
     records::manifest(
         &Check::of(c, file::MANIFEST),
+        &Check::of(c, file::DEMONSTRATIONS),
         &c.manifest,
+        &c.demonstrations,
         &world,
         &c.scenarios,
     )?;
     records::scenarios(&Check::of(c, file::SCENARIOS), &c.scenarios, &world)
+}
+
+/// `combinations.jsonl` against the manifest's blocks and the world.
+pub(super) fn combinations(
+    c: &CompiledDir,
+    list: &[packwright_compiler::artifact::CombinationRecord],
+) -> Result<()> {
+    let world = World::check(&Check::of(c, file::ORDERS), &c.world)?;
+    records::combinations(&Check::of(c, file::COMBINATIONS), &c.manifest, list, &world)
 }
 
 /// Two positions written from the same value (the compiler rounds them to

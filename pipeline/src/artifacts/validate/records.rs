@@ -1,6 +1,6 @@
-//! The manifest's and the scenarios' records against `orders.json`: the
-//! counts, the blocks' ranges, the demonstrations' products and samples,
-//! the suites' cases.
+//! The manifest's, the demonstrations', the combinations' and the
+//! scenarios' records against `orders.json`: the counts, the blocks'
+//! ranges, the demonstrations' products and samples, the suites' cases.
 
 use super::check::Check;
 use super::world::{World, assignment, start};
@@ -8,9 +8,13 @@ use crate::artifacts::field::Field;
 use crate::error::{ArtifactProblem as P, Result};
 use packwright_compiler::artifact::*;
 
+/// The manifest (`c`) and `demonstrations.jsonl` (`cd`, `demonstrations`)
+/// together.
 pub(super) fn manifest(
     c: &Check,
+    cd: &Check,
     m: &Manifest,
+    demonstrations: &[DemonstrationRecord],
     world: &World,
     scenarios: &ScenariosFile,
 ) -> Result<()> {
@@ -27,7 +31,7 @@ pub(super) fn manifest(
         (
             "demonstrations",
             m.counts.demonstrations,
-            m.demonstrations.len(),
+            demonstrations.len(),
         ),
         ("suites", m.counts.suites, scenarios.suites.len()),
         ("scenarios", m.counts.scenarios, cases),
@@ -48,9 +52,9 @@ pub(super) fn manifest(
     }
 
     let blocks = root.key("demo_blocks");
-    let demos = root.key("demonstrations");
-    for (d, demo) in m.demonstrations.iter().enumerate() {
-        demonstration(c, &demos.index(d), demo, world)?;
+    let demos = Field::ROOT;
+    for (d, demo) in demonstrations.iter().enumerate() {
+        demonstration(cd, &demos.index(d), demo, world)?;
     }
     c.unique(
         &blocks,
@@ -68,29 +72,13 @@ pub(super) fn manifest(
                 &block.kind,
             ));
         }
-        let (_, inv) = world.setting(c, &at, &block.cell, &block.inventory)?;
+        world.setting(c, &at, &block.cell, &block.inventory)?;
         world.order(
             c,
             &at.key("order"),
             block.order.as_deref(),
             &block.inventory,
         )?;
-        let products: Vec<&str> = inv.products.iter().map(|p| p.product.as_str()).collect();
-        for (key, combinations) in [
-            ("kept_combinations", &block.kept_combinations),
-            ("held_out_combinations", &block.held_out_combinations),
-        ] {
-            let list = at.key(key);
-            for (k, combination) in combinations.iter().enumerate() {
-                c.names_of(
-                    &list.index(k),
-                    combination,
-                    &products,
-                    "product of the inventory",
-                    &mut Vec::new(),
-                )?;
-            }
-        }
         if block.first_demonstration != next {
             return Err(c.differs(
                 &at.key("first_demonstration"),
@@ -98,7 +86,7 @@ pub(super) fn manifest(
                 format!("{next} (the demonstrations follow the blocks' order)"),
             ));
         }
-        let left = m.demonstrations.len().saturating_sub(next);
+        let left = demonstrations.len().saturating_sub(next);
         if block.demonstrations > left {
             return Err(c.fail(
                 &at.key("demonstrations"),
@@ -111,11 +99,11 @@ pub(super) fn manifest(
         let range = next..next + block.demonstrations;
         let whose = format!("demonstrations {range:?} are block {b}'s");
         let mut samples = 0usize;
-        for (d, demo) in m.demonstrations[range.clone()].iter().enumerate() {
+        for (d, demo) in demonstrations[range.clone()].iter().enumerate() {
             let at = demos.index(next + d);
-            c.same_name(&at.key("block"), &demo.block, &block.name, &whose)?;
-            c.same_name(&at.key("cell"), &demo.cell, &block.cell, "its block's cell")?;
-            c.same_name(
+            cd.same_name(&at.key("block"), &demo.block, &block.name, &whose)?;
+            cd.same_name(&at.key("cell"), &demo.cell, &block.cell, "its block's cell")?;
+            cd.same_name(
                 &at.key("inventory"),
                 &demo.inventory,
                 &block.inventory,
@@ -126,8 +114,8 @@ pub(super) fn manifest(
         c.count(&at.key("samples"), block.samples, samples)?;
         next = range.end;
     }
-    if let Some(demo) = m.demonstrations.get(next) {
-        return Err(c.differs(
+    if let Some(demo) = demonstrations.get(next) {
+        return Err(cd.differs(
             &demos.index(next).key("block"),
             format!("`{}`", demo.block),
             "a block whose range of demonstrations holds this one",
@@ -135,23 +123,22 @@ pub(super) fn manifest(
     }
 
     let mut first = 0;
-    for (d, demo) in m.demonstrations.iter().enumerate() {
+    for (d, demo) in demonstrations.iter().enumerate() {
         let at = demos.index(d);
         if demo.first_sample != first {
-            return Err(c.differs(
+            return Err(cd.differs(
                 &at.key("first_sample"),
                 demo.first_sample,
                 format!("{first} (the samples of the demonstrations before)"),
             ));
         }
-        c.count(&at.key("samples"), demo.samples, 2 * demo.sequence.len())?;
+        cd.count(&at.key("samples"), demo.samples, 2 * demo.sequence.len())?;
         first += demo.samples;
     }
     c.count(&counts.key("samples"), m.counts.samples, first)?;
     let tensors = root.key("tensors");
     c.count(&tensors.key("samples"), m.tensors.samples, first)?;
-    let width = m
-        .demonstrations
+    let width = demonstrations
         .iter()
         .map(|d| d.start.len())
         .max()
@@ -162,6 +149,67 @@ pub(super) fn manifest(
         m.tensors.edges,
         2 * width.saturating_sub(1),
     )
+}
+
+/// `combinations.jsonl` (`c`): each line's block is a `demos` block of
+/// the manifest and its products are the block inventory's; each block's
+/// kept combinations come first, then its held-out ones, as many as the
+/// manifest counts.
+pub(super) fn combinations(
+    c: &Check,
+    m: &Manifest,
+    list: &[CombinationRecord],
+    world: &World,
+) -> Result<()> {
+    let mut next = 0;
+    for block in &m.demo_blocks {
+        let (_, inv) = world.setting(c, &Field::ROOT, &block.cell, &block.inventory)?;
+        let products: Vec<&str> = inv.products.iter().map(|p| p.product.as_str()).collect();
+        for (kept, count) in [
+            (true, block.kept_combinations),
+            (false, block.held_out_combinations),
+        ] {
+            for k in next..next + count {
+                let at = Field::ROOT.index(k);
+                let Some(record) = list.get(k) else {
+                    return Err(c.fail(
+                        &at,
+                        P::CountMismatch {
+                            expected: next + count,
+                            found: list.len(),
+                        },
+                    ));
+                };
+                let whose = format!("the manifest's block `{}`", block.name);
+                c.same_name(&at.key("block"), &record.block, &block.name, &whose)?;
+                if record.kept != kept {
+                    return Err(c.differs(
+                        &at.key("kept"),
+                        record.kept,
+                        format!("{kept} (a block's kept combinations come first)"),
+                    ));
+                }
+                c.names_of(
+                    &at.key("products"),
+                    &record.products,
+                    &products,
+                    "product of the inventory",
+                    &mut Vec::new(),
+                )?;
+            }
+            next += count;
+        }
+    }
+    if list.len() != next {
+        return Err(c.fail(
+            &Field::ROOT,
+            P::CountMismatch {
+                expected: next,
+                found: list.len(),
+            },
+        ));
+    }
+    Ok(())
 }
 
 /// A demonstration: its setting, assignment, and the products it handles

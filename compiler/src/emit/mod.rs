@@ -1,23 +1,52 @@
-//! Phase 6: serialise everything into the artifact files' bytes. Pure and
+//! Phase 6: write everything out as the artifact files. Pure and
 //! deterministic: the same model gives the same bytes (floats rounded to
-//! micrometres in JSON, tensors in a fixed order).
+//! micrometres in JSON, tensors in a fixed order); the files are written
+//! through an [`Output`] the caller gives.
+//!
+//! Demonstrations are streamed: generated a chunk at a time
+//! ([`CHUNK`]), each chunk written as lines of `demonstrations.jsonl` and
+//! as rows of every tensor of `graphs.safetensors` (`tensors`), then
+//! dropped, so that memory does not grow with the number of
+//! demonstrations. `manifest.json` is written last: a directory with a
+//! manifest is complete.
+
+mod tensors;
+
+pub use tensors::serialize as graphs_bytes;
 
 use crate::artifact::*;
-use crate::dataset::{Graphs, slot_goal};
+use crate::dataset::{Shape, build_chunk, slot_goal};
 use crate::error::Error;
-use crate::expand::{Expanded, Setup};
+use crate::expand::{DemoBlock, Expanded, Setup};
 use crate::model::{Cell, Model, RobotModel};
+use crate::output::{Output, OutputFile};
 use crate::source::SourceMap;
-use safetensors::tensor::{Dtype, TensorView};
 use serde::Serialize;
 use sha2::{Digest, Sha256};
-use std::collections::HashMap;
+use std::io::{BufWriter, Write};
+use tensors::TensorsWriter;
 
-/// One output file.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Artifact {
+pub use crate::output::Artifact;
+
+/// Demonstrations generated, encoded and written at a time.
+pub const CHUNK: usize = 1024;
+
+/// The files of a compiled directory.
+pub mod file {
+    pub const MANIFEST: &str = "manifest.json";
+    pub const LABELS: &str = "labels.json";
+    pub const ORDERS: &str = "orders.json";
+    pub const SCENARIOS: &str = "scenarios.json";
+    pub const DEMONSTRATIONS: &str = "demonstrations.jsonl";
+    pub const COMBINATIONS: &str = "combinations.jsonl";
+    pub const GRAPHS: &str = "graphs.safetensors";
+}
+
+/// A file written, and its length.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Written {
     pub name: &'static str,
-    pub bytes: Vec<u8>,
+    pub bytes: u64,
 }
 
 /// Round to micrometres so that JSON shows `0.58`, not `0.5800000000000001`.
@@ -38,34 +67,178 @@ fn json<T: Serialize>(value: &T) -> Result<Vec<u8>, Error> {
     Ok(bytes)
 }
 
+fn write_error(file: &'static str) -> impl Fn(std::io::Error) -> Error {
+    move |e| Error::Write {
+        file: file.into(),
+        reason: e.to_string(),
+    }
+}
+
+fn create(out: &dyn Output, name: &'static str) -> Result<Box<dyn OutputFile>, Error> {
+    out.create(name).map_err(write_error(name))
+}
+
+/// Writes a whole file of `bytes`.
+fn whole(out: &dyn Output, name: &'static str, bytes: &[u8]) -> Result<Written, Error> {
+    let mut f = create(out, name)?;
+    f.write_all(bytes).map_err(write_error(name))?;
+    let bytes = f.finish().map_err(write_error(name))?;
+    Ok(Written { name, bytes })
+}
+
+/// A file of JSON lines, buffered.
+struct Lines {
+    name: &'static str,
+    w: BufWriter<Box<dyn OutputFile>>,
+}
+
+impl Lines {
+    fn create(out: &dyn Output, name: &'static str) -> Result<Lines, Error> {
+        Ok(Lines {
+            name,
+            w: BufWriter::with_capacity(1 << 20, create(out, name)?),
+        })
+    }
+
+    fn line<T: Serialize>(&mut self, value: &T) -> Result<(), Error> {
+        serde_json::to_writer(&mut self.w, value).map_err(|e| Error::Write {
+            file: self.name.into(),
+            reason: e.to_string(),
+        })?;
+        self.w.write_all(b"\n").map_err(write_error(self.name))
+    }
+
+    fn finish(self) -> Result<Written, Error> {
+        let name = self.name;
+        let f = self
+            .w
+            .into_inner()
+            .map_err(|e| write_error(name)(e.into_error()))?;
+        let bytes = f.finish().map_err(write_error(name))?;
+        Ok(Written { name, bytes })
+    }
+}
+
+/// Writes every artifact of a clean compilation into `out`, the manifest
+/// last; the files written.
 pub fn emit(
     sources: &SourceMap,
     m: &Model,
     ex: &Expanded,
-    g: &Graphs,
+    shape: Shape,
+    out: &dyn Output,
+) -> Result<Vec<Written>, Error> {
+    let mut written = vec![
+        whole(out, file::LABELS, &json(&labels(m))?)?,
+        whole(out, file::ORDERS, &json(&world(m))?)?,
+        whole(out, file::SCENARIOS, &json(&scenarios(m, ex))?)?,
+    ];
+    written.extend(demonstrations(m, ex, shape, out)?);
+    written.push(combinations(m, ex, out)?);
+    written.push(whole(
+        out,
+        file::MANIFEST,
+        &json(&manifest(sources, m, ex, shape))?,
+    )?);
+    Ok(written)
+}
+
+/// Every artifact in memory (for tests and tools).
+pub fn emit_to_memory(
+    sources: &SourceMap,
+    m: &Model,
+    ex: &Expanded,
+    shape: Shape,
 ) -> Result<Vec<Artifact>, Error> {
-    Ok(vec![
-        Artifact {
-            name: "manifest.json",
-            bytes: json(&manifest(sources, m, ex, g))?,
-        },
-        Artifact {
-            name: "labels.json",
-            bytes: json(&labels(m))?,
-        },
-        Artifact {
-            name: "orders.json",
-            bytes: json(&world(m))?,
-        },
-        Artifact {
-            name: "scenarios.json",
-            bytes: json(&scenarios(m, ex))?,
-        },
-        Artifact {
-            name: "graphs.safetensors",
-            bytes: tensors(g)?,
-        },
+    let out = crate::output::MemoryOutput::new();
+    emit(sources, m, ex, shape, &out)?;
+    Ok(out.artifacts())
+}
+
+/// `demonstrations.jsonl` and `graphs.safetensors`, a chunk at a time.
+fn demonstrations(
+    m: &Model,
+    ex: &Expanded,
+    shape: Shape,
+    out: &dyn Output,
+) -> Result<[Written; 2], Error> {
+    let mut lines = Lines::create(out, file::DEMONSTRATIONS)?;
+    let mut tensors = TensorsWriter::start(create(out, file::GRAPHS)?, shape)?;
+    let mut demos = ex.demonstrations(m);
+    let (mut index, mut sample) = (0usize, 0usize);
+    loop {
+        let chunk = demos.by_ref().take(CHUNK).collect::<Result<Vec<_>, _>>()?;
+        if chunk.is_empty() {
+            break;
+        }
+        let g = build_chunk(
+            m,
+            chunk.iter().enumerate().map(|(i, d)| (index + i, d)),
+            shape.width,
+            sample,
+        );
+        for (d, &(first, n)) in chunk.iter().zip(&g.per_demo) {
+            lines.line(&demonstration_record(m, &ex.blocks[d.block], d, first, n))?;
+        }
+        tensors.write(&g)?;
+        index += chunk.len();
+        sample += g.s;
+    }
+    if index != ex.demonstration_count() {
+        return Err(Error::Internal {
+            what: format!(
+                "{index} demonstrations generated of {}",
+                ex.demonstration_count()
+            ),
+        });
+    }
+    Ok([
+        lines.finish()?,
+        tensors.finish().map(|bytes| Written {
+            name: file::GRAPHS,
+            bytes,
+        })?,
     ])
+}
+
+fn demonstration_record(
+    m: &Model,
+    block: &DemoBlock,
+    d: &crate::expand::Demonstration,
+    first_sample: usize,
+    samples: usize,
+) -> DemonstrationRecord {
+    let s = &d.setup;
+    DemonstrationRecord {
+        block: block.name.clone(),
+        cell: m.cells[m.inventories[s.inventory].cell].name.clone(),
+        inventory: m.inventories[s.inventory].name.clone(),
+        assignment: assignments(m, s),
+        sequence: names(m, s.inventory, &d.sequence),
+        human_packed: names(m, s.inventory, &s.human_packed),
+        missing: names(m, s.inventory, &s.missing),
+        start: start(m, s),
+        first_sample,
+        samples,
+    }
+}
+
+/// `combinations.jsonl`: every `demos` block's combinations, kept and
+/// held out.
+fn combinations(m: &Model, ex: &Expanded, out: &dyn Output) -> Result<Written, Error> {
+    let mut lines = Lines::create(out, file::COMBINATIONS)?;
+    for b in &ex.blocks {
+        for (kept, list) in [(true, &b.kept), (false, &b.held_out)] {
+            for c in list {
+                lines.line(&CombinationRecord {
+                    block: b.name.clone(),
+                    kept,
+                    products: names(m, b.inventory, c),
+                })?;
+            }
+        }
+    }
+    lines.finish()
 }
 
 fn name_of(m: &Model, inventory: usize, entry: usize) -> String {
@@ -112,50 +285,23 @@ fn names(m: &Model, inventory: usize, entries: &[usize]) -> Vec<String> {
     entries.iter().map(|&e| name_of(m, inventory, e)).collect()
 }
 
-fn manifest(sources: &SourceMap, m: &Model, ex: &Expanded, g: &Graphs) -> Manifest {
+fn manifest(sources: &SourceMap, m: &Model, ex: &Expanded, shape: Shape) -> Manifest {
     let cell_of = |inv: usize| m.cells[m.inventories[inv].cell].name.clone();
     let demo_blocks = ex
         .blocks
         .iter()
-        .map(|b| {
-            let range = b.first_demo..b.first_demo + b.demos;
-            DemoBlockRecord {
-                name: b.name.clone(),
-                kind: b.kind.into(),
-                cell: cell_of(b.inventory),
-                inventory: m.inventories[b.inventory].name.clone(),
-                order: b.order.map(|o| m.orders[o].name.clone()),
-                configurations: b.configurations,
-                kept_combinations: b.kept.iter().map(|c| names(m, b.inventory, c)).collect(),
-                held_out_combinations: b
-                    .held_out
-                    .iter()
-                    .map(|c| names(m, b.inventory, c))
-                    .collect(),
-                first_demonstration: b.first_demo,
-                demonstrations: b.demos,
-                samples: g.per_demo[range].iter().map(|(_, n)| n).sum(),
-            }
-        })
-        .collect();
-    let demonstrations = ex
-        .demonstrations
-        .iter()
-        .zip(&g.per_demo)
-        .map(|(d, &(first, n))| {
-            let s = &d.setup;
-            DemonstrationRecord {
-                block: ex.blocks[d.block].name.clone(),
-                cell: cell_of(s.inventory),
-                inventory: m.inventories[s.inventory].name.clone(),
-                assignment: assignments(m, s),
-                sequence: names(m, s.inventory, &d.sequence),
-                human_packed: names(m, s.inventory, &s.human_packed),
-                missing: names(m, s.inventory, &s.missing),
-                start: start(m, s),
-                first_sample: first,
-                samples: n,
-            }
+        .map(|b| DemoBlockRecord {
+            name: b.name.clone(),
+            kind: b.kind.into(),
+            cell: cell_of(b.inventory),
+            inventory: m.inventories[b.inventory].name.clone(),
+            order: b.order.map(|o| m.orders[o].name.clone()),
+            configurations: b.configurations,
+            kept_combinations: b.kept.len(),
+            held_out_combinations: b.held_out.len(),
+            first_demonstration: b.first_demo,
+            demonstrations: b.demos,
+            samples: 2 * b.handled,
         })
         .collect();
     Manifest {
@@ -174,18 +320,17 @@ fn manifest(sources: &SourceMap, m: &Model, ex: &Expanded, g: &Graphs) -> Manife
             inventories: m.inventories.len(),
             orders: m.orders.len(),
             demo_blocks: ex.blocks.len(),
-            demonstrations: ex.demonstrations.len(),
-            samples: g.s,
+            demonstrations: ex.demonstration_count(),
+            samples: shape.samples,
             suites: ex.suites.len(),
             scenarios: ex.suites.iter().map(|s| s.cases.len()).sum(),
         },
         tensors: TensorShapes {
-            samples: g.s,
-            nodes: g.m,
-            edges: g.edges(),
+            samples: shape.samples,
+            nodes: shape.width,
+            edges: shape.edges(),
         },
         demo_blocks,
-        demonstrations,
     }
 }
 
@@ -338,72 +483,4 @@ fn scenarios(m: &Model, ex: &Expanded) -> ScenariosFile {
             })
             .collect(),
     }
-}
-
-fn le_bytes<T: Copy, const N: usize>(values: &[T], to: impl Fn(T) -> [u8; N]) -> Vec<u8> {
-    values.iter().flat_map(|&v| to(v)).collect()
-}
-
-/// `graphs.safetensors`; tensor names, dtypes and shapes are documented in
-/// the README.
-fn tensors(g: &Graphs) -> Result<Vec<u8>, Error> {
-    use crate::artifact::tensor;
-    let (s, m, e) = (g.s, g.m, g.edges());
-    let data: Vec<(&str, Dtype, Vec<usize>, Vec<u8>)> = vec![
-        (
-            tensor::NODES,
-            Dtype::F32,
-            vec![s, m, 4],
-            le_bytes(&g.nodes, f32::to_le_bytes),
-        ),
-        (
-            tensor::NODE_MASK,
-            Dtype::U8,
-            vec![s, m],
-            g.node_mask.clone(),
-        ),
-        (
-            tensor::GOAL,
-            Dtype::F32,
-            vec![s, 3],
-            le_bytes(&g.goal, f32::to_le_bytes),
-        ),
-        (
-            tensor::TARGET,
-            Dtype::I64,
-            vec![s],
-            le_bytes(&g.target, i64::to_le_bytes),
-        ),
-        (
-            tensor::LABEL,
-            Dtype::I64,
-            vec![s],
-            le_bytes(&g.label, i64::to_le_bytes),
-        ),
-        (tensor::STAGE, Dtype::U8, vec![s], g.stage.clone()),
-        (
-            tensor::DEMO,
-            Dtype::I64,
-            vec![s],
-            le_bytes(&g.demo, i64::to_le_bytes),
-        ),
-        (
-            tensor::EDGE_INDEX,
-            Dtype::I64,
-            vec![2, e],
-            le_bytes(&g.edge_index, i64::to_le_bytes),
-        ),
-    ];
-    let internal = |e: safetensors::SafeTensorError| Error::Internal {
-        what: e.to_string(),
-    };
-    let views = data
-        .iter()
-        .map(|(name, dtype, shape, bytes)| {
-            TensorView::new(*dtype, shape.clone(), bytes).map(|v| (*name, v))
-        })
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(internal)?;
-    let metadata = HashMap::from([("schema".to_owned(), schema::GRAPHS.to_owned())]);
-    safetensors::serialize(views, Some(metadata)).map_err(internal)
 }

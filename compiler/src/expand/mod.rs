@@ -10,20 +10,30 @@
 //! - `scenarios`, per case: (1) the N-combination, (2) its slots, (3)
 //!   human-packed and (4) missing products, (5) jitter.
 //! - `scenario`: (1) jitter.
+//!
+//! Demonstrations are not held in memory: [`expand`] generates each
+//! block's once to check it (jitter that cannot place a product) and to
+//! count it, and [`Expanded::demonstrations`] generates them again, in
+//! the same order and with the same draws, for whoever writes them out
+//! (`demonstrations`). Scenario cases are kept: a run needs them by name.
+
+mod demonstrations;
+
+pub use demonstrations::Demonstrations;
+use demonstrations::{BlockSource, Kept};
 
 use crate::error::Error;
 use crate::model::*;
 use crate::source::Loc;
-use packwright_grammar::ast::SequenceMode;
-use rand::seq::{SliceRandom, index};
+use rand::seq::index;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// A block may generate at most this many demonstrations or cases.
 pub const MAX_GENERATED: u64 = 1_000_000;
 /// The files of one compilation together may generate at most this many
-/// demonstrations and cases (everything generated is held in memory: see
-/// README, "Reliability").
+/// demonstrations and cases (the cases are held in memory, the
+/// demonstrations streamed: see README, "Reliability").
 pub const MAX_GENERATED_TOTAL: u64 = 1_000_000;
 /// Redraws of one product's jitter before giving up.
 pub const JITTER_TRIES: u32 = 100;
@@ -63,6 +73,8 @@ pub struct Demonstration {
 
 #[derive(Debug, Clone)]
 pub struct DemoBlock {
+    /// Where its demonstrations come from.
+    source: BlockSource,
     pub name: String,
     /// `demo` or `demos`.
     pub kind: &'static str,
@@ -75,6 +87,11 @@ pub struct DemoBlock {
     pub held_out: Vec<Vec<usize>>,
     pub first_demo: usize,
     pub demos: usize,
+    /// Products handled, summed over its demonstrations (each is two
+    /// graph samples).
+    pub handled: usize,
+    /// The most products present in one of its demonstrations.
+    pub most_present: usize,
 }
 
 #[derive(Debug, Clone)]
@@ -97,24 +114,30 @@ pub struct Suite {
 #[derive(Debug, Clone, Default)]
 pub struct Expanded {
     pub blocks: Vec<DemoBlock>,
-    pub demonstrations: Vec<Demonstration>,
     pub suites: Vec<Suite>,
+}
+
+impl Expanded {
+    /// How many demonstrations the blocks generate.
+    pub fn demonstration_count(&self) -> usize {
+        self.blocks.iter().map(|b| b.demos).sum()
+    }
+
+    /// Every demonstration, block after block, generated as [`expand`]
+    /// generated them (same order, same draws). `m` must be the model
+    /// this was expanded from.
+    pub fn demonstrations<'a>(&'a self, m: &'a Model) -> Demonstrations<'a> {
+        Demonstrations::new(m, &self.blocks)
+    }
 }
 
 pub fn expand(m: &Model) -> Result<Expanded, Vec<Error>> {
     let mut out = Expanded::default();
     let mut errors = Vec::new();
-    for d in &m.demos {
+    for (i, d) in m.demos.iter().enumerate() {
         let order = &m.orders[d.order];
-        let mut positions: Vec<[f64; 2]> = m.inventories[order.inventory]
-            .entries
-            .iter()
-            .map(|e| e.at)
-            .collect();
-        for p in &d.at {
-            positions[p.entry] = p.at;
-        }
         out.blocks.push(DemoBlock {
+            source: BlockSource::Observed(i),
             name: d.name.clone(),
             kind: "demo",
             inventory: order.inventory,
@@ -122,25 +145,16 @@ pub fn expand(m: &Model) -> Result<Expanded, Vec<Error>> {
             configurations: 1,
             kept: Vec::new(),
             held_out: Vec::new(),
-            first_demo: out.demonstrations.len(),
+            first_demo: out.blocks.len(),
             demos: 1,
-        });
-        out.demonstrations.push(Demonstration {
-            block: out.blocks.len() - 1,
-            setup: Setup {
-                inventory: order.inventory,
-                assignment: order.assignment.iter().map(|a| (a.entry, a.slot)).collect(),
-                human_packed: Vec::new(),
-                missing: Vec::new(),
-                positions,
-            },
-            sequence: d.sequence.clone(),
+            handled: d.sequence.len(),
+            most_present: m.inventories[order.inventory].entries.len(),
         });
     }
     // Every block's size is counted before anything is generated: one
     // too large, or one that takes the files over the total, is refused
     // at the statement that sets its size, and nothing is generated.
-    let mut generated = out.demonstrations.len() as u64;
+    let mut generated = out.blocks.len() as u64;
     let sizes = m
         .demo_sets
         .iter()
@@ -169,9 +183,10 @@ pub fn expand(m: &Model) -> Result<Expanded, Vec<Error>> {
     if !errors.is_empty() {
         return Err(errors);
     }
-    for d in &m.demo_sets {
-        if let Err(e) = demo_set(m, d, &mut out) {
-            errors.push(e);
+    for (i, d) in m.demo_sets.iter().enumerate() {
+        match demo_set(m, i, d, out.demonstration_count()) {
+            Ok(block) => out.blocks.push(block),
+            Err(e) => errors.push(e),
         }
     }
     for s in &m.scenarios {
@@ -297,89 +312,34 @@ fn demos_count(d: &DemosDef) -> Result<u64, Error> {
     Ok(((keep as u128) * per_combo * d.repeat as u128) as u64)
 }
 
-fn demo_set(m: &Model, d: &DemosDef, out: &mut Expanded) -> Result<(), Error> {
+/// The `demos` block `index` of the model, its demonstrations generated
+/// once to check and count them (numbered from `first_demo`).
+fn demo_set(m: &Model, index: usize, d: &DemosDef, first_demo: usize) -> Result<DemoBlock, Error> {
     let c = &d.choose;
-    let (n_combos, keep) = kept_count(d)?;
     let total = count_configurations(c.entries.len(), c.slots.len(), c.n);
-    let mut rng = ChaCha8Rng::seed_from_u64(d.seed);
-    let combos = combinations(c.entries.len(), c.n);
-    debug_assert_eq!(combos.len(), n_combos);
-    if keep == 0 {
-        return Err(Error::KeepsNothing {
-            at: c.loc,
-            fraction: d.keep,
-            combinations: n_combos as u64,
-        });
-    }
-    let mut order: Vec<usize> = (0..n_combos).collect();
-    if keep < n_combos {
-        order.shuffle(&mut rng);
-    }
-    let mut kept_idx = order[..keep].to_vec();
-    let mut held_idx = order[keep..].to_vec();
-    kept_idx.sort_unstable();
-    held_idx.sort_unstable();
-    let as_entries =
-        |i: &usize| -> Vec<usize> { combos[*i].iter().map(|&j| c.entries[j]).collect() };
-    let slot_tuples = arrangements(c.slots.len(), c.n);
-    let inv = &m.inventories[d.inventory];
-    let block = out.blocks.len();
-    let first_demo = out.demonstrations.len();
-    for ci in &kept_idx {
-        let products = as_entries(ci);
-        for tuple in &slot_tuples {
-            let mut assignment: Vec<(usize, usize)> = products
-                .iter()
-                .zip(tuple)
-                .map(|(&e, &s)| (e, c.slots[s]))
-                .collect();
-            assignment.sort_unstable();
-            for _ in 0..d.repeat {
-                let selected: Vec<usize> = assignment.iter().map(|(e, _)| *e).collect();
-                let (human_packed, missing) = draw_absent(&mut rng, &selected, d.human, d.missing);
-                let positions = jitter(m, inv, &human_packed, &missing, d.jitter, &mut rng)
-                    .map_err(|product| {
-                        jitter_error(m, inv, product, d.jitter_loc.unwrap_or(d.loc))
-                    })?;
-                let mut sequence: Vec<usize> = selected
-                    .iter()
-                    .copied()
-                    .filter(|e| !human_packed.contains(e) && !missing.contains(e))
-                    .collect();
-                match d.sequence {
-                    SequenceMode::Ascending => {}
-                    SequenceMode::Descending => sequence.reverse(),
-                    SequenceMode::Listed => {
-                        sequence.sort_by_key(|e| c.entries.iter().position(|x| x == e));
-                    }
-                    SequenceMode::Random => sequence.shuffle(&mut rng),
-                }
-                out.demonstrations.push(Demonstration {
-                    block,
-                    setup: Setup {
-                        inventory: d.inventory,
-                        assignment: assignment.clone(),
-                        human_packed,
-                        missing,
-                        positions,
-                    },
-                    sequence,
-                });
-            }
-        }
-    }
-    out.blocks.push(DemoBlock {
+    let kept = Kept::choose(d)?;
+    let mut block = DemoBlock {
+        source: BlockSource::Generated(index),
         name: d.name.clone(),
         kind: "demos",
         inventory: d.inventory,
         order: None,
         configurations: u64::try_from(total).unwrap_or(u64::MAX),
-        kept: kept_idx.iter().map(as_entries).collect(),
-        held_out: held_idx.iter().map(as_entries).collect(),
+        kept: kept.kept_entries(d),
+        held_out: kept.held_out_entries(d),
         first_demo,
-        demos: out.demonstrations.len() - first_demo,
-    });
-    Ok(())
+        demos: 0,
+        handled: 0,
+        most_present: 0,
+    };
+    let entries = m.inventories[d.inventory].entries.len();
+    for demo in demonstrations::generated(m, d, kept) {
+        let demo = demo?;
+        block.demos += 1;
+        block.handled += demo.sequence.len();
+        block.most_present = block.most_present.max(entries - demo.setup.missing.len());
+    }
+    Ok(block)
 }
 
 /// Draws which selected entries a worker packed and which are missing.
@@ -588,6 +548,7 @@ mod tests {
     use super::*;
     use crate::source::FileId;
     use packwright_grammar::Span;
+    use packwright_grammar::ast::SequenceMode;
 
     #[test]
     fn combinatorics() {
