@@ -244,8 +244,24 @@ fn mutate(rng: &mut ChaCha8Rng, text: &str, other: &str) -> String {
 }
 
 /// One artifact file's bytes damaged: a JSON value changed, dropped or
-/// retyped, or raw bytes flipped.
+/// retyped (in a JSON Lines file, in one record), or raw bytes flipped.
 fn damage(rng: &mut ChaCha8Rng, bytes: &[u8]) -> Vec<u8> {
+    let lines: Vec<&[u8]> = bytes.split(|&b| b == b'\n').collect();
+    if lines.len() > 2 && serde_json::from_slice::<serde_json::Value>(bytes).is_err() {
+        let k = rng.random_range(0..lines.len());
+        let mut out = Vec::with_capacity(bytes.len());
+        for (i, line) in lines.iter().enumerate() {
+            if i > 0 {
+                out.push(b'\n');
+            }
+            if i == k {
+                out.extend(damage(rng, line));
+            } else {
+                out.extend_from_slice(line);
+            }
+        }
+        return out;
+    }
     if let Ok(mut v) = serde_json::from_slice::<serde_json::Value>(bytes)
         && rng.random_bool(0.8)
     {

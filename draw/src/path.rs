@@ -4,10 +4,9 @@
 //!
 //! The path is built from what a `World` sees (commanded joints through
 //! forward kinematics, their speed, and the suction), so it is the same
-//! for any planner and any world. A sub-goal is where the arm stops or,
-//! blending through a via point, slows below [`ToolPath::SLOW`] of its top
-//! speed: on the expert's packages these are exactly its sub-goals but the
-//! approach point, which it passes at speed.
+//! for any planner and any world. The sub-goals come from the plan (the
+//! report's cup tip at each sub-goal reached), each marked at the sample
+//! nearest it: the arm passes through most of them without stopping.
 
 use crate::svg::{Attrs, Svg, num, points};
 use crate::view::View;
@@ -91,15 +90,14 @@ impl ToolPath {
     /// The thinning distance (m).
     pub const STEP: f64 = 0.002;
 
-    /// A sample is slow below this share of the path's top speed.
-    pub const SLOW: f64 = 0.1;
-
     /// The path of `samples` (one per control cycle, in order): stages from
-    /// the suction, a `Pick`/`Release` where it switches, a numbered
-    /// `SubGoal` at the slowest sample of every slow stretch after the arm
-    /// first moved.
-    pub fn from_samples(samples: &[Sample]) -> ToolPath {
-        let mut subgoals = slow_points(samples).into_iter().peekable();
+    /// the suction, a `Pick`/`Release` where it switches, and a numbered
+    /// `SubGoal` at the sample nearest each of `subgoals` (the cup tip at
+    /// each sub-goal the planner reached, in order: the arm passes through
+    /// most of them without stopping, so they are taken from the plan, not
+    /// guessed from the motion).
+    pub fn from_samples(samples: &[Sample], subgoals: &[[f64; 3]]) -> ToolPath {
+        let mut subgoals = nearest_samples(samples, subgoals).into_iter().peekable();
         let mut path = ToolPath::default();
         let mut stage = Stage::Approach;
         let mut moved_since_release = false;
@@ -305,29 +303,30 @@ pub(crate) fn draw(svg: &mut Svg, path: &ToolPath, view: &View, which: &str) {
     svg.end();
 }
 
-/// The slowest sample of every stretch of samples slower than
-/// [`ToolPath::SLOW`] of the top speed, after the first fast one.
-fn slow_points(samples: &[Sample]) -> Vec<usize> {
-    let peak = samples.iter().map(|s| s.speed).fold(0.0, f64::max);
-    let slow = |i: usize| samples[i].speed <= peak * ToolPath::SLOW;
+/// The index of the sample nearest each sub-goal, in order. A sub-goal
+/// never lies past the next switch of the suction (a pick's or a
+/// release's sub-goal is reached before the suction switches there), so
+/// each is looked for from the sample after the previous one's up to the
+/// first switch after that (the switch sample included); the indices
+/// increase.
+fn nearest_samples(samples: &[Sample], subgoals: &[[f64; 3]]) -> Vec<usize> {
+    let switches: Vec<usize> = (1..samples.len())
+        .filter(|&i| samples[i].suction != samples[i - 1].suction)
+        .collect();
     let mut out = Vec::new();
-    let mut i = (0..samples.len())
-        .find(|&i| !slow(i))
-        .unwrap_or(samples.len());
-    while i < samples.len() {
-        if !slow(i) {
-            i += 1;
-            continue;
-        }
-        let start = i;
-        while i < samples.len() && slow(i) {
-            i += 1;
-        }
-        // The first of the slowest.
-        let k = (start..i)
-            .min_by(|&a, &b| samples[a].speed.total_cmp(&samples[b].speed))
-            .unwrap_or(start);
+    let mut from = 0;
+    for goal in subgoals {
+        let end = switches
+            .iter()
+            .find(|&&s| s > from)
+            .map_or(samples.len(), |&s| s + 1);
+        let Some(k) = (from..end).min_by(|&a, &b| {
+            distance(samples[a].tip, *goal).total_cmp(&distance(samples[b].tip, *goal))
+        }) else {
+            break;
+        };
         out.push(k);
+        from = k + 1;
     }
     out
 }
@@ -362,7 +361,8 @@ mod tests {
             s(0.6, false, true), // rest 3: retreat ends
             s(0.7, false, false),
         ];
-        let path = ToolPath::from_samples(&samples);
+        let subgoals = [[0.2, 0.0, 0.5], [0.4, 0.0, 0.5], [0.6, 0.0, 0.5]];
+        let path = ToolPath::from_samples(&samples, &subgoals);
         let stages: Vec<Stage> = path.points.iter().map(|(_, st)| *st).collect();
         use Stage::*;
         assert_eq!(
@@ -387,24 +387,60 @@ mod tests {
     }
 
     #[test]
-    fn a_via_point_passed_slowly_is_a_sub_goal() {
-        // Fast, slowing to a tenth at sample 3, fast again, a stop at the end.
-        let speeds = [0.0, 1.0, 0.5, 0.05, 0.08, 0.5, 1.0, 0.3, 0.0];
-        let samples: Vec<Sample> = speeds
-            .iter()
-            .enumerate()
-            .map(|(i, &speed)| Sample {
-                tip: [i as f64 * 0.01, 0.0, 0.5],
+    fn a_sub_goal_passed_without_stopping_is_marked_where_the_path_is_nearest() {
+        // A straight pass at full speed; the sub-goal 4 mm off the path
+        // near sample 3, another at the end; nothing moves: none.
+        let samples: Vec<Sample> = (0..9)
+            .map(|i| Sample {
+                tip: [f64::from(i) * 0.01, 0.0, 0.5],
                 suction: false,
-                speed,
+                speed: 1.0,
             })
             .collect();
-        let path = ToolPath::from_samples(&samples);
+        let path = ToolPath::from_samples(&samples, &[[0.031, 0.004, 0.5], [0.08, 0.0, 0.5]]);
         let at: Vec<f64> = path.events.iter().map(|e| e.at[0]).collect();
         assert_eq!(at, [0.03, 0.08]);
-        // Nothing moves: no sub-goal.
-        let still = vec![samples[0]; 5];
-        assert!(ToolPath::from_samples(&still).events.is_empty());
+        assert!(ToolPath::from_samples(&samples, &[]).events.is_empty());
+    }
+
+    #[test]
+    fn a_sub_goal_is_not_looked_for_past_the_next_switch() {
+        // Carry from x = 0 to 0.4 then release; back to x = 0.1 after it.
+        // The sub-goal at x = 0.1 before the release is on the carry, not
+        // on the way back.
+        let samples: Vec<Sample> = [0.0, 0.1, 0.2, 0.3, 0.4, 0.4, 0.3, 0.1]
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| Sample {
+                tip: [x, 0.0, 0.5],
+                suction: i < 5,
+                speed: 0.01,
+            })
+            .collect();
+        let path = ToolPath::from_samples(
+            &samples,
+            &[[0.1, 0.0, 0.5], [0.4, 0.0, 0.5], [0.1, 0.0, 0.5]],
+        );
+        let subgoals: Vec<usize> = path
+            .events
+            .iter()
+            .filter_map(|e| match e.kind {
+                EventKind::SubGoal(n) => Some(n),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(subgoals, [1, 2, 3]);
+        let release = path
+            .events
+            .iter()
+            .position(|e| e.kind == EventKind::Release)
+            .expect("a release");
+        let third = path
+            .events
+            .iter()
+            .position(|e| e.kind == EventKind::SubGoal(3))
+            .expect("a third sub-goal");
+        assert!(third > release);
     }
 
     #[test]
@@ -412,7 +448,7 @@ mod tests {
         let samples: Vec<Sample> = (0..=100)
             .map(|i| s(f64::from(i) * 0.0001, false, false))
             .collect();
-        let path = ToolPath::from_samples(&samples);
+        let path = ToolPath::from_samples(&samples, &[]);
         assert!(path.points.len() < 10, "{}", path.points.len());
         assert_eq!(path.end(), Some([0.01, 0.0, 0.5]));
     }

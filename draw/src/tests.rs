@@ -108,7 +108,7 @@ fn short_path() -> ToolPath {
     go(lift, slot, true, 30);
     go(slot, release, true, 10);
     go(release, slot, false, 10);
-    let mut path = ToolPath::from_samples(&samples);
+    let mut path = ToolPath::from_samples(&samples, &[above, top, lift, slot, release, slot]);
     path.events.push(crate::path::Event {
         at: lift,
         kind: EventKind::Fallback("placing 1: the policy's 60 steps ended 35 mm away".into()),

@@ -456,6 +456,10 @@ pub struct Report {
     pub violations: Vec<Violation>,
     #[serde(skip)]
     pub timing: Timing,
+    /// The cup tip at each sub-goal reached, in the order planned (every
+    /// planner): what `execute --svg` marks and numbers.
+    #[serde(skip)]
+    pub subgoals: Vec<[f64; 3]>,
 }
 
 impl Report {

@@ -401,7 +401,7 @@ pub fn executed_picture(
             }
         })
         .collect();
-    let mut path = ToolPath::from_samples(&samples);
+    let mut path = ToolPath::from_samples(&samples, &report.subgoals);
     // Each pick belongs to the product nearest the cup; its release
     // follows it.
     let mut handled: Vec<(String, [f64; 3], Option<[f64; 3]>)> = Vec::new();

@@ -369,6 +369,7 @@ impl<W: World> Learned<'_, W> {
                 start = *end;
             }
             tips[k] = self.station.tip(&start);
+            self.station.subgoals.push(tips[k]);
             legs.push(Leg::new(route, switch, load));
             if let (Suction::On, Some(size), Some(top)) = (switch, plan.gripped, plan.contact) {
                 gripped = Some(self.gripped_at(&start, plan, size, top));

@@ -156,6 +156,8 @@ impl<W: World> Scripted<'_, W> {
                 .push(planned.solve_us + elapsed * 1e6);
             let (goal, route) = routed?;
             replanned |= goal != planned.joints;
+            let reached = self.station.tip(&goal);
+            self.station.subgoals.push(reached);
             if let Some(info) = info {
                 self.record(info, k, &start, &goal, &route.samples);
             }

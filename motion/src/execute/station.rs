@@ -165,6 +165,8 @@ pub(crate) struct Station<'a, W: World> {
     pub checker: Checker,
     pub clock: Clock,
     pub timing: Timing,
+    /// The cup tip at each sub-goal reached, in order.
+    pub subgoals: Vec<[f64; 3]>,
     pub budget: PlanningBudget,
     /// Planning spent on the package so far.
     pub package_planning: Duration,
@@ -204,6 +206,7 @@ impl<'a, W: World> Station<'a, W> {
             base: Isometry3::translation(x, y, z),
             clock: Clock::default(),
             timing: Timing::default(),
+            subgoals: Vec::new(),
             budget: PlanningBudget::default(),
             package_planning: Duration::ZERO,
             deadline: None,
@@ -694,6 +697,7 @@ impl<'a, W: World> Station<'a, W> {
             fallbacks: Vec::new(),
             violations: Vec::new(),
             timing: std::mem::take(&mut self.timing),
+            subgoals: std::mem::take(&mut self.subgoals),
         }
     }
 }
