@@ -70,6 +70,16 @@ pub enum Error {
         percent: f64,
         min_percent: f64,
     },
+    #[error(
+        "the settle time after a {after} must be between {min_ms} ms and {max_ms} ms, not {ms} ms"
+    )]
+    SettleOutOfRange {
+        at: Loc,
+        after: &'static str,
+        ms: f64,
+        min_ms: f64,
+        max_ms: f64,
+    },
     #[error("slot `{slot}` is outside box `{box_name}`")]
     SlotOutsideBox {
         at: Loc,
@@ -237,6 +247,7 @@ impl Error {
             Error::SlotBeforeBox { .. } => "E024",
             Error::BadGeometry { .. } => "E025",
             Error::SpeedOutOfRange { .. } => "E026",
+            Error::SettleOutOfRange { .. } => "E027",
             Error::SlotOutsideBox { .. } => "E030",
             Error::SlotsOverlap { .. } => "E031",
             Error::SlotTaken { .. } => "E032",
@@ -278,6 +289,7 @@ impl Error {
             | Error::SlotBeforeBox { at, .. }
             | Error::BadGeometry { at, .. }
             | Error::SpeedOutOfRange { at, .. }
+            | Error::SettleOutOfRange { at, .. }
             | Error::SlotOutsideBox { at, .. }
             | Error::SlotsOverlap { at, .. }
             | Error::SlotTaken { at, .. }
@@ -318,6 +330,7 @@ impl Error {
             Error::SlotBeforeBox { .. } => "no box declared above this slot".into(),
             Error::BadGeometry { .. } => "here".into(),
             Error::SpeedOutOfRange { .. } => "out of range".into(),
+            Error::SettleOutOfRange { .. } => "out of range".into(),
             Error::SlotOutsideBox { by_mm, .. } => format!("{by_mm:.0} mm outside the box"),
             Error::SlotsOverlap { .. } => "too close to the other slot".into(),
             Error::SlotTaken { .. } => "slot already taken".into(),
@@ -389,6 +402,7 @@ impl Error {
             Error::SlotBeforeBox { .. } => "declare the `box` before its slots: a slot belongs to the box above it".into(),
             Error::BadGeometry { fix, .. } => fix.clone(),
             Error::SpeedOutOfRange { min_percent, .. } => format!("write a share of the arm's full speed from `speed {min_percent} %` to `speed 100 %` (the default, the robot's own limits), or as a fraction (`speed 0.5`); the motions keep their paths and take 1/speed as long"),
+            Error::SettleOutOfRange { after, min_ms, max_ms, .. } => format!("write a time from `settle {min_ms} ms after {after}` to `settle {max_ms} ms after {after}` (the default: `settle 100 ms after grip`, `settle 500 ms after release`); the arm waits that long, still, after the suction switches"),
             Error::SlotOutsideBox { .. } => "move the slot inside the box footprint (box centre ± width/2, ± depth/2)".into(),
             Error::SlotsOverlap { .. } => "slots must be at least 10 mm apart; move or remove one".into(),
             Error::SlotTaken { .. } => "give each product its own slot".into(),

@@ -18,6 +18,15 @@ pub const SUCTION_RANGE: (f64, f64) = (0.020, 0.300);
 pub const LIFT_RANGE: (f64, f64) = (0.020, 0.500);
 /// The speeds a cell may declare, as shares of the arm's full speed.
 pub const SPEED_RANGE: (f64, f64) = (0.01, 1.0);
+/// How long the arm waits, still, after the suction grips a product when
+/// a cell gives no `settle … after grip` (s): the vacuum builds up.
+pub const DEFAULT_GRIP_SETTLE: f64 = 0.1;
+/// How long the arm waits, still, after releasing a product when a cell
+/// gives no `settle … after release` (s): the product drops and comes to
+/// rest before the cup backs up.
+pub const DEFAULT_RELEASE_SETTLE: f64 = 0.5;
+/// The settle times a cell may declare (s).
+pub const SETTLE_RANGE: (f64, f64) = (0.0, 5.0);
 /// UR10 reach, measured horizontally from the base axis.
 pub const UR10_REACH_MIN: f64 = 0.20;
 pub const UR10_REACH_MAX: f64 = 1.30;
@@ -97,6 +106,10 @@ pub struct Cell {
     /// (velocity limits times `speed`, accelerations times its square,
     /// jerks times its cube).
     pub speed: f64,
+    /// Seconds the arm waits, still, after the suction grips a product.
+    pub grip_settle: f64,
+    /// Seconds the arm waits, still, after the suction releases a product.
+    pub release_settle: f64,
     pub boxes: Vec<BoxDef>,
     pub slots: Vec<Slot>,
 }

@@ -285,6 +285,8 @@ impl Resolver<'_> {
         let mut pending = Once::new("pending");
         let mut lift = Once::new("lift");
         let mut speed = Once::new("speed");
+        let mut grip_settle = Once::new("settle … after grip");
+        let mut release_settle = Once::new("settle … after release");
         let mut boxes: Vec<BoxDef> = Vec::new();
         let mut slots: Vec<Slot> = Vec::new();
         let mut ok = true;
@@ -351,6 +353,24 @@ impl Resolver<'_> {
                         ok = false;
                     }
                     speed.set(s.value, sl, &mut self.errors);
+                }
+                ast::CellStmt::Settle { time, after } => {
+                    let (lo, hi) = SETTLE_RANGE;
+                    if !(lo..=hi).contains(&time.seconds) {
+                        self.errors.push(Error::SettleOutOfRange {
+                            at: Loc::new(f, time.span),
+                            after: after.as_str(),
+                            ms: time.seconds * 1000.0,
+                            min_ms: lo * 1000.0,
+                            max_ms: hi * 1000.0,
+                        });
+                        ok = false;
+                    }
+                    let once = match after {
+                        ast::SettleAfter::Grip => &mut grip_settle,
+                        ast::SettleAfter::Release => &mut release_settle,
+                    };
+                    once.set(time.seconds, sl, &mut self.errors);
                 }
                 ast::CellStmt::Pending(a, b) => {
                     let (a, b) = (self.table_point(a, f), self.table_point(b, f));
@@ -442,6 +462,8 @@ impl Resolver<'_> {
         );
         let lift = lift.get().unwrap_or(DEFAULT_LIFT);
         let speed = speed.get().unwrap_or(1.0);
+        let grip_settle = grip_settle.get().unwrap_or(DEFAULT_GRIP_SETTLE);
+        let release_settle = release_settle.get().unwrap_or(DEFAULT_RELEASE_SETTLE);
         if boxes.is_empty() {
             e.push(Error::MissingStatement {
                 at: block,
@@ -474,6 +496,8 @@ impl Resolver<'_> {
             pending,
             lift,
             speed,
+            grip_settle,
+            release_settle,
             boxes,
             slots,
         });

@@ -322,6 +322,9 @@ fn cell_stmt(s: &CellStmt) -> String {
         CellStmt::Lift(l) => format!("lift {}", length(l)),
         CellStmt::Speed(s) if s.percent => format!("speed {} %", s.number),
         CellStmt::Speed(s) => format!("speed {}", s.number),
+        CellStmt::Settle { time: t, after } => {
+            format!("settle {} after {}", time(t), after.as_str())
+        }
     }
 }
 
@@ -329,6 +332,13 @@ fn length(l: &Length) -> String {
     match l.unit {
         Some(u) => format!("{} {}", l.number, u.as_str()),
         None => l.number.clone(),
+    }
+}
+
+fn time(t: &Time) -> String {
+    match t.unit {
+        Some(u) => format!("{} {}", t.number, u.as_str()),
+        None => t.number.clone(),
     }
 }
 

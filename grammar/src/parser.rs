@@ -106,6 +106,9 @@ fn describe(rule: Rule) -> Option<&'static str> {
         Rule::kw_slot => "`slot`",
         Rule::kw_lift => "`lift`",
         Rule::kw_speed => "`speed`",
+        Rule::kw_settle => "`settle`",
+        Rule::kw_after => "`after`",
+        Rule::settle_event => "`grip` or `release`",
         Rule::kw_cube => "`cube`",
         Rule::kw_mass => "`mass`",
         Rule::kw_customer => "`customer`",
@@ -356,6 +359,17 @@ impl Builder {
                 Rule::suction_stmt => CellStmt::Suction(self.length(k.remove(1))),
                 Rule::lift_stmt => CellStmt::Lift(self.length(k.remove(1))),
                 Rule::speed_stmt => CellStmt::Speed(self.share(k.remove(1))),
+                Rule::settle_stmt => {
+                    let after = if k.get(3).is_some_and(|e| e.as_str() == "grip") {
+                        SettleAfter::Grip
+                    } else {
+                        SettleAfter::Release
+                    };
+                    CellStmt::Settle {
+                        time: self.time(k.remove(1)),
+                        after,
+                    }
+                }
                 Rule::pending_stmt => {
                     let to = self.point(k.remove(3));
                     let from = self.point(k.remove(1));
@@ -769,6 +783,32 @@ impl Builder {
                 });
                 Count { value: 0, span: s }
             }
+        }
+    }
+
+    /// A time: `ms` or `s`, or a bare number of seconds.
+    fn time(&mut self, p: P) -> Time {
+        let (number, value, unit, s) = self.quantity(p);
+        let unit = match unit {
+            None => None,
+            Some((u, us)) => match u.as_str() {
+                "ms" => Some(TimeUnit::Ms),
+                "s" => Some(TimeUnit::S),
+                _ => {
+                    self.errors.push(SyntaxError::UnknownUnit {
+                        span: us,
+                        unit: u,
+                        allowed: "`ms` or `s` (or no unit for seconds)",
+                    });
+                    None
+                }
+            },
+        };
+        Time {
+            seconds: value * unit.map_or(1.0, TimeUnit::seconds),
+            number,
+            unit,
+            span: s,
         }
     }
 

@@ -407,7 +407,8 @@ const KEYWORDS: &[&str] = &[
     "for", "robot", "ur10", "urdf", "base", "suction", "pending", "to", "box", "size", "slot",
     "lift", "cube", "mass", "customer", "batch", "sequence", "at", "choose", "of", "into", "keep",
     "jitter", "repeat", "seed", "human", "packed", "packs", "missing", "count", "ascending",
-    "descending", "listed", "random", "mm", "cm", "m", "kg", "g",
+    "descending", "listed", "random", "mm", "cm", "m", "kg", "g", "speed", "settle", "after",
+    "grip", "release", "ms", "s",
 ];
 
 /// An identifier; sometimes one spelled like a keyword or unit (the grammar
@@ -540,6 +541,22 @@ fn cell_stmt() -> impl Strategy<Value = Vec<Tok>> {
         ])),
         (name(), point()).prop_map(|(n, at)| toks(vec![vec![w("slot"), Tok::W(n)], at])),
         size().prop_map(|q| toks(vec![vec![w("lift")], q])),
+        (number(150, false), prop::option::of(Just("%"))).prop_map(|(n, u)| {
+            let mut t = vec![w("speed"), Tok::W(n)];
+            t.extend(u.map(Tok::U));
+            t
+        }),
+        (
+            number(9999, true),
+            prop::option::of(select(&["ms", "s"][..])),
+            select(&["grip", "release"][..]),
+        )
+            .prop_map(|(n, u, after)| {
+                let mut t = vec![w("settle"), Tok::W(n)];
+                t.extend(u.map(Tok::U));
+                t.extend([w("after"), w(after)]);
+                t
+            }),
     ]
 }
 

@@ -53,6 +53,8 @@ pub fn scene_of(cell: &CellRecord) -> CellScene {
         suction: cell.suction,
         lift: cell.lift,
         speed: cell.speed,
+        grip_settle: cell.grip_settle,
+        release_settle: cell.release_settle,
         pending: (cell.pending.min, cell.pending.max),
         boxes: cell
             .boxes

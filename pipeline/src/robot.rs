@@ -189,6 +189,8 @@ mod tests {
                     suction: 0.1,
                     lift: 0.15,
                     speed: 1.0,
+                    grip_settle: 0.1,
+                    release_settle: 0.5,
                     pending: ([0.3, -0.3], [0.7, 0.3]),
                     boxes: Vec::new(),
                     slots: Vec::new(),

@@ -32,10 +32,6 @@ pub(crate) const MAX_RAISES: u32 = 100;
 /// The lowest a lift may be lowered to, above where the cup gripped (m):
 /// the cell language's smallest `lift`.
 pub(crate) const MIN_LIFT: f64 = 0.02;
-/// Cycles to wait after switching the suction on (0.1 s).
-const SUCTION_SETTLE: usize = 50;
-/// Cycles to let a released product settle (0.5 s).
-const RELEASE_SETTLE: usize = 250;
 /// Height of the cup tip in the start pose.
 pub const HOME_HEIGHT: f64 = 0.35;
 
@@ -571,7 +567,10 @@ impl<'a, W: World> Station<'a, W> {
     }
 
     /// Sends checked commands, then switches the suction and lets things
-    /// settle; fails on any contact the world reports.
+    /// settle, the arm still, for the cell's settle time (its
+    /// `grip_settle` after switching on, `release_settle` after switching
+    /// off, in whole control cycles: [`settle_cycles`]); fails on any
+    /// contact the world reports.
     pub fn send(&mut self, samples: &[Joints], suction: Suction) -> Result<(), Failure> {
         if self.clock.stop.is_none() {
             self.clock.stop = Some(self.world.observe().joints);
@@ -581,15 +580,17 @@ impl<'a, W: World> Station<'a, W> {
             self.world.step()?;
             self.clock.steps += 1;
         }
+        let period = self.world.control_period();
+        let cell = &self.task.cell;
         let settle = match suction {
             Suction::Keep => 0,
             Suction::On => {
                 self.world.set_suction(true)?;
-                SUCTION_SETTLE
+                settle_cycles(cell.grip_settle, period)
             }
             Suction::Off => {
                 self.world.set_suction(false)?;
-                RELEASE_SETTLE
+                settle_cycles(cell.release_settle, period)
             }
         };
         for _ in 0..settle {
@@ -600,7 +601,7 @@ impl<'a, W: World> Station<'a, W> {
             && let Some(&end) = samples.last()
         {
             self.stopped_at(end);
-            self.clock.bound_s += settle as f64 * self.world.control_period();
+            self.clock.bound_s += settle as f64 * period;
         }
         match self.world.take_collisions().into_iter().next() {
             Some(contact) => Err(Failure::Collision { contact }),
@@ -699,6 +700,20 @@ impl<'a, W: World> Station<'a, W> {
 }
 
 pub(crate) use packwright_interface::outcome::SUCCESS_RADIUS;
+
+/// The whole control cycles of `period` seconds a settle time of
+/// `seconds` takes, rounded to the nearest (the default 0.1 s and 0.5 s
+/// are 50 and 250 cycles of 2 ms). A time that is not finite or not
+/// positive, or a period that is not, is no wait.
+pub(crate) fn settle_cycles(seconds: f64, period: f64) -> usize {
+    let cycles = seconds / period;
+    if cycles.is_finite() && cycles > 0.0 {
+        // The compiler bounds settle times to seconds: far below usize.
+        cycles.round() as usize
+    } else {
+        0
+    }
+}
 
 /// The outcome of a measured `row` whose handling ended with `result`:
 /// packed when it rests within [`SUCCESS_RADIUS`] of its goal, else the

@@ -3,7 +3,7 @@
 //! refused with its file, field and problem.
 
 use super::*;
-use packwright_compiler::artifact::tensor;
+use packwright_compiler::artifact::{CellRecord, tensor};
 use packwright_compiler::{Anywhere, Compiled, MemoryLoader, compile, emit};
 
 const LINE2: &str = include_str!("../../../orders/cells/line2.pack");
@@ -295,6 +295,16 @@ fn numbers_are_finite_and_sizes_positive() {
     f.world.cells[0].suction = 10.0;
     expect(f.check(), "orders.json", "cells[0].suction", |p| {
         matches!(p, ArtifactProblem::LengthOutOfRange { value: 10.0, .. })
+    });
+    let mut f = fixture();
+    f.world.cells[0].release_settle = 60.0;
+    expect(f.check(), "orders.json", "cells[0].release_settle", |p| {
+        matches!(p, ArtifactProblem::TimeOutOfRange { value: 60.0, .. })
+    });
+    let mut f = fixture();
+    f.world.cells[0].grip_settle = -0.1;
+    expect(f.check(), "orders.json", "cells[0].grip_settle", |p| {
+        matches!(p, ArtifactProblem::TimeOutOfRange { .. })
     });
     let mut f = fixture();
     f.world.cells[0].boxes[0].size[0] = -0.5;
@@ -678,4 +688,24 @@ fn messages_name_the_file_and_the_field() {
         "{message}"
     );
     assert!(message.contains("compile"), "{message}");
+}
+
+#[test]
+fn settle_times_are_written_only_when_not_the_defaults() {
+    // An `orders.json` cell without settle times (as written before they
+    // existed, or with the defaults) reads as the defaults, and a cell
+    // with other times keeps them through a write and a read.
+    let f = fixture();
+    let mut cell = f.world.cells[0].clone();
+    let json = serde_json::to_value(&cell).expect("serialises");
+    assert!(json.get("grip_settle").is_none() && json.get("release_settle").is_none());
+    let back: CellRecord = serde_json::from_value(json).expect("reads");
+    assert_eq!((back.grip_settle, back.release_settle), (0.1, 0.5));
+    cell.grip_settle = 0.25;
+    cell.release_settle = 0.0;
+    let json = serde_json::to_value(&cell).expect("serialises");
+    assert_eq!(json["grip_settle"], 0.25);
+    assert_eq!(json["release_settle"], 0.0);
+    let back: CellRecord = serde_json::from_value(json).expect("reads");
+    assert_eq!((back.grip_settle, back.release_settle), (0.25, 0.0));
 }
