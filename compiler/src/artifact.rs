@@ -192,6 +192,10 @@ pub struct CellRecord {
         skip_serializing_if = "is_default_release_settle"
     )]
     pub release_settle: f64,
+    /// The guarded descent's speed, a share of the cell's speed (absent in
+    /// older artifacts and when 1: the cell's speed).
+    #[serde(default = "full_speed", skip_serializing_if = "at_full_speed")]
+    pub descent: f64,
     pub pending: RectRecord,
     pub boxes: Vec<BoxRecord>,
     pub slots: Vec<SlotRecord>,

@@ -80,6 +80,14 @@ pub enum Error {
         min_ms: f64,
         max_ms: f64,
     },
+    #[error(
+        "the descent's speed must be between {min_percent} % and 100 % of the cell's speed, not {percent} %"
+    )]
+    DescentOutOfRange {
+        at: Loc,
+        percent: f64,
+        min_percent: f64,
+    },
     #[error("slot `{slot}` is outside box `{box_name}`")]
     SlotOutsideBox {
         at: Loc,
@@ -248,6 +256,7 @@ impl Error {
             Error::BadGeometry { .. } => "E025",
             Error::SpeedOutOfRange { .. } => "E026",
             Error::SettleOutOfRange { .. } => "E027",
+            Error::DescentOutOfRange { .. } => "E028",
             Error::SlotOutsideBox { .. } => "E030",
             Error::SlotsOverlap { .. } => "E031",
             Error::SlotTaken { .. } => "E032",
@@ -290,6 +299,7 @@ impl Error {
             | Error::BadGeometry { at, .. }
             | Error::SpeedOutOfRange { at, .. }
             | Error::SettleOutOfRange { at, .. }
+            | Error::DescentOutOfRange { at, .. }
             | Error::SlotOutsideBox { at, .. }
             | Error::SlotsOverlap { at, .. }
             | Error::SlotTaken { at, .. }
@@ -331,6 +341,7 @@ impl Error {
             Error::BadGeometry { .. } => "here".into(),
             Error::SpeedOutOfRange { .. } => "out of range".into(),
             Error::SettleOutOfRange { .. } => "out of range".into(),
+            Error::DescentOutOfRange { .. } => "out of range".into(),
             Error::SlotOutsideBox { by_mm, .. } => format!("{by_mm:.0} mm outside the box"),
             Error::SlotsOverlap { .. } => "too close to the other slot".into(),
             Error::SlotTaken { .. } => "slot already taken".into(),
@@ -403,6 +414,7 @@ impl Error {
             Error::BadGeometry { fix, .. } => fix.clone(),
             Error::SpeedOutOfRange { min_percent, .. } => format!("write a share of the arm's full speed from `speed {min_percent} %` to `speed 100 %` (the default, the robot's own limits), or as a fraction (`speed 0.5`); the motions keep their paths and take 1/speed as long"),
             Error::SettleOutOfRange { after, min_ms, max_ms, .. } => format!("write a time from `settle {min_ms} ms after {after}` to `settle {max_ms} ms after {after}` (the default: `settle 100 ms after grip`, `settle 500 ms after release`); the arm waits that long, still, after the suction switches"),
+            Error::DescentOutOfRange { min_percent, .. } => format!("write a share of the cell's speed from `descent {min_percent} %` to `descent 100 %` (the default: as fast as every other motion), or as a fraction (`descent 0.25`); the descent from the hover onto a product's top face keeps its path and takes 1/descent as long"),
             Error::SlotOutsideBox { .. } => "move the slot inside the box footprint (box centre ± width/2, ± depth/2)".into(),
             Error::SlotsOverlap { .. } => "slots must be at least 10 mm apart; move or remove one".into(),
             Error::SlotTaken { .. } => "give each product its own slot".into(),

@@ -27,6 +27,8 @@ pub const DEFAULT_GRIP_SETTLE: f64 = 0.1;
 pub const DEFAULT_RELEASE_SETTLE: f64 = 0.5;
 /// The settle times a cell may declare (s).
 pub const SETTLE_RANGE: (f64, f64) = (0.0, 5.0);
+/// The descent speeds a cell may declare, as shares of its speed.
+pub const DESCENT_RANGE: (f64, f64) = (0.01, 1.0);
 /// UR10 reach, measured horizontally from the base axis.
 pub const UR10_REACH_MIN: f64 = 0.20;
 pub const UR10_REACH_MAX: f64 = 1.30;
@@ -110,6 +112,10 @@ pub struct Cell {
     pub grip_settle: f64,
     /// Seconds the arm waits, still, after the suction releases a product.
     pub release_settle: f64,
+    /// The guarded descent onto a product's top face (from the hover to
+    /// the contact) as a share of the cell's speed (1: no slower than
+    /// every other motion).
+    pub descent: f64,
     pub boxes: Vec<BoxDef>,
     pub slots: Vec<Slot>,
 }

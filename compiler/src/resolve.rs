@@ -287,6 +287,7 @@ impl Resolver<'_> {
         let mut speed = Once::new("speed");
         let mut grip_settle = Once::new("settle … after grip");
         let mut release_settle = Once::new("settle … after release");
+        let mut descent = Once::new("descent");
         let mut boxes: Vec<BoxDef> = Vec::new();
         let mut slots: Vec<Slot> = Vec::new();
         let mut ok = true;
@@ -353,6 +354,18 @@ impl Resolver<'_> {
                         ok = false;
                     }
                     speed.set(s.value, sl, &mut self.errors);
+                }
+                ast::CellStmt::Descent(s) => {
+                    let (lo, hi) = DESCENT_RANGE;
+                    if !(lo..=hi).contains(&s.value) {
+                        self.errors.push(Error::DescentOutOfRange {
+                            at: Loc::new(f, s.span),
+                            percent: s.value * 100.0,
+                            min_percent: lo * 100.0,
+                        });
+                        ok = false;
+                    }
+                    descent.set(s.value, sl, &mut self.errors);
                 }
                 ast::CellStmt::Settle { time, after } => {
                     let (lo, hi) = SETTLE_RANGE;
@@ -464,6 +477,7 @@ impl Resolver<'_> {
         let speed = speed.get().unwrap_or(1.0);
         let grip_settle = grip_settle.get().unwrap_or(DEFAULT_GRIP_SETTLE);
         let release_settle = release_settle.get().unwrap_or(DEFAULT_RELEASE_SETTLE);
+        let descent = descent.get().unwrap_or(1.0);
         if boxes.is_empty() {
             e.push(Error::MissingStatement {
                 at: block,
@@ -498,6 +512,7 @@ impl Resolver<'_> {
             speed,
             grip_settle,
             release_settle,
+            descent,
             boxes,
             slots,
         });

@@ -259,6 +259,9 @@ pub enum CellStmt {
         time: Time,
         after: SettleAfter,
     },
+    /// The speed of the guarded descent onto a product's top face, a share
+    /// of the cell's speed.
+    Descent(Share),
 }
 
 #[derive(Debug, Clone, PartialEq)]

@@ -322,6 +322,8 @@ fn cell_stmt(s: &CellStmt) -> String {
         CellStmt::Lift(l) => format!("lift {}", length(l)),
         CellStmt::Speed(s) if s.percent => format!("speed {} %", s.number),
         CellStmt::Speed(s) => format!("speed {}", s.number),
+        CellStmt::Descent(s) if s.percent => format!("descent {} %", s.number),
+        CellStmt::Descent(s) => format!("descent {}", s.number),
         CellStmt::Settle { time: t, after } => {
             format!("settle {} after {}", time(t), after.as_str())
         }

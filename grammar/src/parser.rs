@@ -107,6 +107,7 @@ fn describe(rule: Rule) -> Option<&'static str> {
         Rule::kw_lift => "`lift`",
         Rule::kw_speed => "`speed`",
         Rule::kw_settle => "`settle`",
+        Rule::kw_descent => "`descent`",
         Rule::kw_after => "`after`",
         Rule::settle_event => "`grip` or `release`",
         Rule::kw_cube => "`cube`",
@@ -358,7 +359,13 @@ impl Builder {
                 Rule::base_stmt => CellStmt::Base(self.point(k.remove(1))),
                 Rule::suction_stmt => CellStmt::Suction(self.length(k.remove(1))),
                 Rule::lift_stmt => CellStmt::Lift(self.length(k.remove(1))),
-                Rule::speed_stmt => CellStmt::Speed(self.share(k.remove(1))),
+                Rule::speed_stmt => CellStmt::Speed(
+                    self.share(k.remove(1), "`%`, or no unit for a fraction (`speed 0.5`)"),
+                ),
+                Rule::descent_stmt => CellStmt::Descent(self.share(
+                    k.remove(1),
+                    "`%`, or no unit for a fraction (`descent 0.25`)",
+                )),
                 Rule::settle_stmt => {
                     let after = if k.get(3).is_some_and(|e| e.as_str() == "grip") {
                         SettleAfter::Grip
@@ -812,8 +819,9 @@ impl Builder {
         }
     }
 
-    /// A share: a number with `%`, or a plain fraction.
-    fn share(&mut self, p: P) -> Share {
+    /// A share: a number with `%`, or a plain fraction (`allowed` says
+    /// so for the statement's unit error).
+    fn share(&mut self, p: P, allowed: &'static str) -> Share {
         let (number, value, unit, s) = self.quantity(p);
         let percent = match unit {
             None => false,
@@ -822,7 +830,7 @@ impl Builder {
                 self.errors.push(SyntaxError::UnknownUnit {
                     span: us,
                     unit: u,
-                    allowed: "`%`, or no unit for a fraction (`speed 0.5`)",
+                    allowed,
                 });
                 false
             }

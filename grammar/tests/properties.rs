@@ -407,7 +407,7 @@ const KEYWORDS: &[&str] = &[
     "for", "robot", "ur10", "urdf", "base", "suction", "pending", "to", "box", "size", "slot",
     "lift", "cube", "mass", "customer", "batch", "sequence", "at", "choose", "of", "into", "keep",
     "jitter", "repeat", "seed", "human", "packed", "packs", "missing", "count", "ascending",
-    "descending", "listed", "random", "mm", "cm", "m", "kg", "g", "speed", "settle", "after",
+    "descending", "listed", "random", "mm", "cm", "m", "kg", "g", "speed", "settle", "after", "descent",
     "grip", "release", "ms", "s",
 ];
 
@@ -541,11 +541,16 @@ fn cell_stmt() -> impl Strategy<Value = Vec<Tok>> {
         ])),
         (name(), point()).prop_map(|(n, at)| toks(vec![vec![w("slot"), Tok::W(n)], at])),
         size().prop_map(|q| toks(vec![vec![w("lift")], q])),
-        (number(150, false), prop::option::of(Just("%"))).prop_map(|(n, u)| {
-            let mut t = vec![w("speed"), Tok::W(n)];
-            t.extend(u.map(Tok::U));
-            t
-        }),
+        (
+            select(&["speed", "descent"][..]),
+            number(150, false),
+            prop::option::of(Just("%"))
+        )
+            .prop_map(|(kw, n, u)| {
+                let mut t = vec![w(kw), Tok::W(n)];
+                t.extend(u.map(Tok::U));
+                t
+            }),
         (
             number(9999, true),
             prop::option::of(select(&["ms", "s"][..])),

@@ -227,6 +227,26 @@ fn settle_times_are_the_cells() {
 }
 
 #[test]
+fn a_guarded_descent_is_slower_and_packs() {
+    // The descent onto each top face at a quarter of the arm's speed: the
+    // same stops (so the same lower bound), more time, still packed, with
+    // the expert and with RRT-Connect.
+    let assign = [("C", "g1"), ("A", "g3")];
+    for planner in [Planner::Expert, Planner::Rrt { seed: 1 }] {
+        let default = run(&assign, &[], &[], planner);
+        let (arm, mut task, mut sim) = episode(&assign, &[], &[]);
+        task.cell.descent = 0.25;
+        let guarded = execute::run(&mut sim, &arm, &task, &planner);
+        assert_packed(&default);
+        assert_packed(&guarded);
+        for (d, g) in default.products.iter().zip(&guarded.products) {
+            assert!(g.execution_s > d.execution_s + 0.1, "{d:?} against {g:?}");
+            assert!((g.bound_s - d.bound_s).abs() < 1e-9, "{d:?} against {g:?}");
+        }
+    }
+}
+
+#[test]
 fn rrt_connect_packs_an_order() {
     let report = run(
         &[("B", "g4"), ("D", "g2")],

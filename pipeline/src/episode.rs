@@ -55,6 +55,7 @@ pub fn scene_of(cell: &CellRecord) -> CellScene {
         speed: cell.speed,
         grip_settle: cell.grip_settle,
         release_settle: cell.release_settle,
+        descent: cell.descent,
         pending: (cell.pending.min, cell.pending.max),
         boxes: cell
             .boxes

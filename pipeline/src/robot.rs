@@ -191,6 +191,7 @@ mod tests {
                     speed: 1.0,
                     grip_settle: 0.1,
                     release_settle: 0.5,
+                    descent: 1.0,
                     pending: ([0.3, -0.3], [0.7, 0.3]),
                     boxes: Vec::new(),
                     slots: Vec::new(),

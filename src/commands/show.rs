@@ -100,6 +100,9 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
         if cell.speed < 1.0 {
             settings += &format!(", speed {} %", (cell.speed * 1e4).round() / 1e2);
         }
+        if cell.descent < 1.0 {
+            settings += &format!(", descent {} %", (cell.descent * 1e4).round() / 1e2);
+        }
         let ms = |s: f64| (s * 1e6).round() / 1e3;
         if cell.grip_settle != default_grip_settle() {
             settings += &format!(", settle {} ms after grip", ms(cell.grip_settle));

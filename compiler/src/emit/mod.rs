@@ -375,6 +375,7 @@ pub fn cell_record(c: &Cell) -> CellRecord {
         speed: r6(c.speed),
         grip_settle: r6(c.grip_settle),
         release_settle: r6(c.release_settle),
+        descent: r6(c.descent),
         pending: RectRecord {
             min: r6n(c.pending.min),
             max: r6n(c.pending.max),

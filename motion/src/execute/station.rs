@@ -8,7 +8,7 @@
 //! Invariant: nothing reaches the world that [`checked_blend`] did not
 //! return.
 
-use crate::blend::{Blended, blend_capped};
+use crate::blend::{Blended, blend_slowed};
 use crate::collision::{Checker, Held, MAX_STEP, ProductBody};
 use crate::expert::{SubGoal, Suction};
 use crate::rrt::{self, Query, RrtConfig};
@@ -53,6 +53,7 @@ pub(crate) struct Leg {
     pub suction: Suction,
     pub held: Option<Held>,
     pub ignore: Option<String>,
+    pub speed: f64,
 }
 
 /// Where the last of `legs` leaves the arm.
@@ -67,6 +68,7 @@ impl Leg {
             suction,
             held: load.held.cloned(),
             ignore: load.ignore.map(str::to_owned),
+            speed: load.speed,
         }
     }
 
@@ -74,6 +76,7 @@ impl Leg {
         Load {
             held: self.held.as_ref(),
             ignore: self.ignore.as_deref(),
+            speed: self.speed,
         }
     }
 }
@@ -120,11 +123,22 @@ pub(crate) struct Clock {
 }
 
 /// What a motion carries and may touch: the product held, and the one
-/// being picked (not an obstacle).
-#[derive(Debug, Clone, Copy, Default)]
+/// being picked (not an obstacle); and how fast it moves.
+#[derive(Debug, Clone, Copy)]
 pub struct Load<'h> {
     pub held: Option<&'h Held>,
     pub ignore: Option<&'h str>,
+    /// The share of the arm's speed the motion moves at: 1, but on the
+    /// guarded descent onto a top face the cell's `descent`
+    /// ([`Load::guarded`]; [`blend_slowed`] says how a share in (0, 1)
+    /// slows a leg, and that any other value is full speed).
+    pub speed: f64,
+}
+
+impl Default for Load<'_> {
+    fn default() -> Self {
+        Load::FREE
+    }
 }
 
 impl<'h> Load<'h> {
@@ -132,6 +146,7 @@ impl<'h> Load<'h> {
     pub const FREE: Load<'static> = Load {
         held: None,
         ignore: None,
+        speed: 1.0,
     };
 
     /// Nothing held; the product `name` (being picked, or just released)
@@ -140,6 +155,7 @@ impl<'h> Load<'h> {
         Load {
             held: None,
             ignore: Some(name),
+            speed: 1.0,
         }
     }
 
@@ -148,7 +164,14 @@ impl<'h> Load<'h> {
         Load {
             held: Some(held),
             ignore: None,
+            speed: 1.0,
         }
+    }
+
+    /// This load on the guarded descent onto a top face: the motion at
+    /// `speed` (the cell's `descent`, a share of the arm's speed).
+    pub fn guarded(self, speed: f64) -> Load<'h> {
+        Load { speed, ..self }
     }
 }
 
@@ -783,7 +806,8 @@ const MIN_CAP: f64 = 0.2;
 
 /// [`checked_blend`] with a load per leg: `load_of(k)` for the leg ending
 /// at waypoint `k`; a sample is checked with its leg's load (in an
-/// overlap, the later leg's).
+/// overlap, the later leg's), and the leg moves at its load's speed
+/// ([`blend_slowed`]).
 pub fn checked_blend_by<'h>(
     arm: &Arm,
     checker: &Checker,
@@ -813,8 +837,10 @@ pub fn checked_blend_by<'h>(
         return Err(Unchecked::Collides(hit));
     }
     let mut previous: Option<(Blended, Checked)> = None;
+    // Each leg's speed: its load's (the guarded descent is slowed).
+    let speeds: Vec<f64> = (0..waypoints.len()).map(|k| load_of(k).speed).collect();
     loop {
-        let motion = blend_capped(arm.limits, start, waypoints, &caps)
+        let motion = blend_slowed(arm.limits, start, waypoints, &caps, &speeds)
             .map_err(|e| Unchecked::Smoothing(e.to_string()))?;
         // A capped corner changes the samples from its transition on
         // only: those before it passed in the round before.

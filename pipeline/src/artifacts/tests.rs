@@ -302,6 +302,11 @@ fn numbers_are_finite_and_sizes_positive() {
         matches!(p, ArtifactProblem::TimeOutOfRange { value: 60.0, .. })
     });
     let mut f = fixture();
+    f.world.cells[0].descent = 0.0;
+    expect(f.check(), "orders.json", "cells[0].descent", |p| {
+        matches!(p, ArtifactProblem::ShareOutOfRange { value: 0.0, .. })
+    });
+    let mut f = fixture();
     f.world.cells[0].grip_settle = -0.1;
     expect(f.check(), "orders.json", "cells[0].grip_settle", |p| {
         matches!(p, ArtifactProblem::TimeOutOfRange { .. })
@@ -692,20 +697,30 @@ fn messages_name_the_file_and_the_field() {
 
 #[test]
 fn settle_times_are_written_only_when_not_the_defaults() {
-    // An `orders.json` cell without settle times (as written before they
-    // existed, or with the defaults) reads as the defaults, and a cell
-    // with other times keeps them through a write and a read.
+    // An `orders.json` cell without settle times or descent (as written
+    // before they existed, or with the defaults) reads as the defaults,
+    // and a cell with others keeps them through a write and a read.
     let f = fixture();
     let mut cell = f.world.cells[0].clone();
     let json = serde_json::to_value(&cell).expect("serialises");
-    assert!(json.get("grip_settle").is_none() && json.get("release_settle").is_none());
+    for key in ["grip_settle", "release_settle", "descent"] {
+        assert!(json.get(key).is_none(), "{key}");
+    }
     let back: CellRecord = serde_json::from_value(json).expect("reads");
-    assert_eq!((back.grip_settle, back.release_settle), (0.1, 0.5));
+    assert_eq!(
+        (back.grip_settle, back.release_settle, back.descent),
+        (0.1, 0.5, 1.0)
+    );
     cell.grip_settle = 0.25;
     cell.release_settle = 0.0;
+    cell.descent = 0.3;
     let json = serde_json::to_value(&cell).expect("serialises");
     assert_eq!(json["grip_settle"], 0.25);
     assert_eq!(json["release_settle"], 0.0);
+    assert_eq!(json["descent"], 0.3);
     let back: CellRecord = serde_json::from_value(json).expect("reads");
-    assert_eq!((back.grip_settle, back.release_settle), (0.25, 0.0));
+    assert_eq!(
+        (back.grip_settle, back.release_settle, back.descent),
+        (0.25, 0.0, 0.3)
+    );
 }
