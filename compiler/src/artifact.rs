@@ -196,6 +196,13 @@ pub struct CellRecord {
     /// older artifacts and when 1: the cell's speed).
     #[serde(default = "full_speed", skip_serializing_if = "at_full_speed")]
     pub descent: f64,
+    /// The arm's acceleration limits (rad/s², base first) in place of its
+    /// own (absent: its own).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub acceleration: Option<[f64; 6]>,
+    /// The arm's jerk limits (rad/s³) in place of its own (absent: its own).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jerk: Option<[f64; 6]>,
     pub pending: RectRecord,
     pub boxes: Vec<BoxRecord>,
     pub slots: Vec<SlotRecord>,

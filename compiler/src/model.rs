@@ -29,6 +29,15 @@ pub const DEFAULT_RELEASE_SETTLE: f64 = 0.5;
 pub const SETTLE_RANGE: (f64, f64) = (0.0, 5.0);
 /// The descent speeds a cell may declare, as shares of its speed.
 pub const DESCENT_RANGE: (f64, f64) = (0.01, 1.0);
+/// How many joints the arm has: an `acceleration` or `jerk` statement
+/// gives one value per joint.
+pub const ARM_JOINTS: usize = 6;
+/// The joint acceleration limits a cell may declare (rad/s²): bounds of
+/// sense, not the arm's own (the built-in UR10's are 2.5 and 4 rad/s²).
+pub const ACCELERATION_RANGE: (f64, f64) = (0.1, 40.0);
+/// The joint jerk limits a cell may declare (rad/s³; the built-in UR10's
+/// are 10 and 20 rad/s³).
+pub const JERK_RANGE: (f64, f64) = (1.0, 2000.0);
 /// UR10 reach, measured horizontally from the base axis.
 pub const UR10_REACH_MIN: f64 = 0.20;
 pub const UR10_REACH_MAX: f64 = 1.30;
@@ -116,6 +125,12 @@ pub struct Cell {
     /// the contact) as a share of the cell's speed (1: no slower than
     /// every other motion).
     pub descent: f64,
+    /// The arm's acceleration limits (rad/s², base first) in place of its
+    /// own (the URDF's, or the built-in UR10's), before `speed` scales
+    /// them; `None`: its own.
+    pub acceleration: Option<[f64; ARM_JOINTS]>,
+    /// The arm's jerk limits (rad/s³), as `acceleration`.
+    pub jerk: Option<[f64; ARM_JOINTS]>,
     pub boxes: Vec<BoxDef>,
     pub slots: Vec<Slot>,
 }

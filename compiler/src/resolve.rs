@@ -260,6 +260,44 @@ impl Resolver<'_> {
         false
     }
 
+    /// One limit per joint, each in `range` (reported in `unit`): the
+    /// values, or `None` after reporting a wrong count or each value out
+    /// of range.
+    fn joint_values(
+        &mut self,
+        f: FileId,
+        v: &ast::JointValues,
+        statement: &'static str,
+        (min, max): (f64, f64),
+        unit: &'static str,
+    ) -> Option<[f64; ARM_JOINTS]> {
+        let Ok(values) = <[ast::Fraction; ARM_JOINTS]>::try_from(v.values.clone()) else {
+            self.errors.push(Error::JointCount {
+                at: Loc::new(f, v.span),
+                statement,
+                found: v.values.len(),
+                expected: ARM_JOINTS,
+            });
+            return None;
+        };
+        let mut ok = true;
+        for (j, value) in values.iter().enumerate() {
+            if !(min..=max).contains(&value.value) {
+                self.errors.push(Error::JointLimitOutOfRange {
+                    at: Loc::new(f, value.span),
+                    statement,
+                    joint: j + 1,
+                    value: value.value,
+                    min,
+                    max,
+                    unit,
+                });
+                ok = false;
+            }
+        }
+        ok.then(|| values.map(|v| v.value))
+    }
+
     /// A position on the table: `(x, y)`, or `(x, y, 0)`. Products stand
     /// on the table and box floors lie on it, so another height is an error.
     fn table_point(&mut self, p: &ast::Point, f: FileId) -> [f64; 2] {
@@ -288,6 +326,8 @@ impl Resolver<'_> {
         let mut grip_settle = Once::new("settle … after grip");
         let mut release_settle = Once::new("settle … after release");
         let mut descent = Once::new("descent");
+        let mut acceleration = Once::new("acceleration");
+        let mut jerk = Once::new("jerk");
         let mut boxes: Vec<BoxDef> = Vec::new();
         let mut slots: Vec<Slot> = Vec::new();
         let mut ok = true;
@@ -354,6 +394,17 @@ impl Resolver<'_> {
                         ok = false;
                     }
                     speed.set(s.value, sl, &mut self.errors);
+                }
+                ast::CellStmt::Acceleration(v) => {
+                    let values =
+                        self.joint_values(f, v, "acceleration", ACCELERATION_RANGE, "rad/s²");
+                    ok &= values.is_some();
+                    acceleration.set(values, sl, &mut self.errors);
+                }
+                ast::CellStmt::Jerk(v) => {
+                    let values = self.joint_values(f, v, "jerk", JERK_RANGE, "rad/s³");
+                    ok &= values.is_some();
+                    jerk.set(values, sl, &mut self.errors);
                 }
                 ast::CellStmt::Descent(s) => {
                     let (lo, hi) = DESCENT_RANGE;
@@ -478,6 +529,8 @@ impl Resolver<'_> {
         let grip_settle = grip_settle.get().unwrap_or(DEFAULT_GRIP_SETTLE);
         let release_settle = release_settle.get().unwrap_or(DEFAULT_RELEASE_SETTLE);
         let descent = descent.get().unwrap_or(1.0);
+        let acceleration = acceleration.get().flatten();
+        let jerk = jerk.get().flatten();
         if boxes.is_empty() {
             e.push(Error::MissingStatement {
                 at: block,
@@ -513,6 +566,8 @@ impl Resolver<'_> {
             grip_settle,
             release_settle,
             descent,
+            acceleration,
+            jerk,
             boxes,
             slots,
         });

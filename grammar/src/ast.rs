@@ -262,6 +262,18 @@ pub enum CellStmt {
     /// The speed of the guarded descent onto a product's top face, a share
     /// of the cell's speed.
     Descent(Share),
+    /// The arm's acceleration limits, rad/s², one per joint.
+    Acceleration(JointValues),
+    /// The arm's jerk limits, rad/s³, one per joint.
+    Jerk(JointValues),
+}
+
+/// One plain number per joint, base first (`(2.5, 2.5, 2.5, 4, 4, 4)`);
+/// as many as written (the compiler checks the count).
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointValues {
+    pub values: Vec<Fraction>,
+    pub span: Span,
 }
 
 #[derive(Debug, Clone, PartialEq)]

@@ -324,6 +324,8 @@ fn cell_stmt(s: &CellStmt) -> String {
         CellStmt::Speed(s) => format!("speed {}", s.number),
         CellStmt::Descent(s) if s.percent => format!("descent {} %", s.number),
         CellStmt::Descent(s) => format!("descent {}", s.number),
+        CellStmt::Acceleration(v) => format!("acceleration {}", joint_values(v)),
+        CellStmt::Jerk(v) => format!("jerk {}", joint_values(v)),
         CellStmt::Settle { time: t, after } => {
             format!("settle {} after {}", time(t), after.as_str())
         }
@@ -335,6 +337,11 @@ fn length(l: &Length) -> String {
         Some(u) => format!("{} {}", l.number, u.as_str()),
         None => l.number.clone(),
     }
+}
+
+fn joint_values(v: &JointValues) -> String {
+    let numbers: Vec<&str> = v.values.iter().map(|f| f.number.as_str()).collect();
+    format!("({})", numbers.join(", "))
 }
 
 fn time(t: &Time) -> String {

@@ -108,6 +108,8 @@ fn describe(rule: Rule) -> Option<&'static str> {
         Rule::kw_speed => "`speed`",
         Rule::kw_settle => "`settle`",
         Rule::kw_descent => "`descent`",
+        Rule::kw_acceleration => "`acceleration`",
+        Rule::kw_jerk => "`jerk`",
         Rule::kw_after => "`after`",
         Rule::settle_event => "`grip` or `release`",
         Rule::kw_cube => "`cube`",
@@ -366,6 +368,10 @@ impl Builder {
                     k.remove(1),
                     "`%`, or no unit for a fraction (`descent 0.25`)",
                 )),
+                Rule::acceleration_stmt => {
+                    CellStmt::Acceleration(self.joint_values(k.remove(1), "an acceleration"))
+                }
+                Rule::jerk_stmt => CellStmt::Jerk(self.joint_values(k.remove(1), "a jerk")),
                 Rule::settle_stmt => {
                     let after = if k.get(3).is_some_and(|e| e.as_str() == "grip") {
                         SettleAfter::Grip
@@ -841,6 +847,17 @@ impl Builder {
             percent,
             span: s,
         }
+    }
+
+    /// A parenthesised list of plain numbers, one per joint.
+    fn joint_values(&mut self, p: P, what: &'static str) -> JointValues {
+        let s = span(&p);
+        let values = p
+            .into_inner()
+            .filter(|q| q.as_rule() == Rule::quantity)
+            .map(|q| self.fraction(q, what))
+            .collect();
+        JointValues { values, span: s }
     }
 
     fn fraction(&mut self, p: P, what: &'static str) -> Fraction {

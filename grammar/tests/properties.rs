@@ -408,6 +408,7 @@ const KEYWORDS: &[&str] = &[
     "lift", "cube", "mass", "customer", "batch", "sequence", "at", "choose", "of", "into", "keep",
     "jitter", "repeat", "seed", "human", "packed", "packs", "missing", "count", "ascending",
     "descending", "listed", "random", "mm", "cm", "m", "kg", "g", "speed", "settle", "after", "descent",
+    "acceleration", "jerk",
     "grip", "release", "ms", "s",
 ];
 
@@ -549,6 +550,21 @@ fn cell_stmt() -> impl Strategy<Value = Vec<Tok>> {
             .prop_map(|(kw, n, u)| {
                 let mut t = vec![w(kw), Tok::W(n)];
                 t.extend(u.map(Tok::U));
+                t
+            }),
+        (
+            select(&["acceleration", "jerk"][..]),
+            vec(number(99, true), 1..8)
+        )
+            .prop_map(|(kw, values)| {
+                let mut t = vec![w(kw), Tok::P("(")];
+                for (i, v) in values.into_iter().enumerate() {
+                    if i > 0 {
+                        t.push(Tok::P(","));
+                    }
+                    t.push(Tok::W(v));
+                }
+                t.push(Tok::P(")"));
                 t
             }),
         (

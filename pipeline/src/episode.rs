@@ -99,6 +99,14 @@ pub fn arm_of(robot: &RobotRecord) -> Result<Arm> {
     }
 }
 
+/// The arm a cell packs with: its robot, with the cell's acceleration and
+/// jerk limits where it gives them, then slowed to the cell's speed.
+pub fn cell_arm(cell: &CellRecord) -> Result<Arm> {
+    Ok(arm_of(&cell.robot)?
+        .with_dynamics(cell.acceleration, cell.jerk)
+        .at_speed(cell.speed))
+}
+
 /// The name of the cell a setup packs in.
 pub fn cell_of(compiled: &Compiled, setup: &Setup) -> String {
     let m = &compiled.model;
@@ -149,7 +157,7 @@ pub fn episode(m: &Model, setup: &Setup) -> Result<Episode> {
         })
         .collect();
     Ok(Episode {
-        arm: arm_of(&cell.robot)?.at_speed(cell.speed),
+        arm: cell_arm(&cell)?,
         task,
         placements,
     })
@@ -267,7 +275,7 @@ pub fn demonstration_episode(world: &WorldFile, demo: &DemonstrationRecord) -> R
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    let arm = arm_of(&cell.robot)?.at_speed(cell.speed);
+    let arm = cell_arm(cell)?;
     Ok(Episode {
         arm,
         task: OrderTask {

@@ -103,6 +103,16 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
         if cell.descent < 1.0 {
             settings += &format!(", descent {} %", (cell.descent * 1e4).round() / 1e2);
         }
+        let list = |v: &[f64; 6]| {
+            let v: Vec<String> = v.iter().map(f64::to_string).collect();
+            format!("({})", v.join(", "))
+        };
+        if let Some(a) = &cell.acceleration {
+            settings += &format!(", acceleration {} rad/s²", list(a));
+        }
+        if let Some(j) = &cell.jerk {
+            settings += &format!(", jerk {} rad/s³", list(j));
+        }
         let ms = |s: f64| (s * 1e6).round() / 1e3;
         if cell.grip_settle != default_grip_settle() {
             settings += &format!(", settle {} ms after grip", ms(cell.grip_settle));

@@ -376,6 +376,8 @@ pub fn cell_record(c: &Cell) -> CellRecord {
         grip_settle: r6(c.grip_settle),
         release_settle: r6(c.release_settle),
         descent: r6(c.descent),
+        acceleration: c.acceleration.map(|a| a.map(r6)),
+        jerk: c.jerk.map(|j| j.map(r6)),
         pending: RectRecord {
             min: r6n(c.pending.min),
             max: r6n(c.pending.max),

@@ -307,6 +307,11 @@ fn numbers_are_finite_and_sizes_positive() {
         matches!(p, ArtifactProblem::ShareOutOfRange { value: 0.0, .. })
     });
     let mut f = fixture();
+    f.world.cells[0].jerk = Some([10.0, 10.0, 10.0, 20.0, -20.0, 20.0]);
+    expect(f.check(), "orders.json", "cells[0].jerk[4]", |p| {
+        matches!(p, ArtifactProblem::LimitOutOfRange { value: -20.0, .. })
+    });
+    let mut f = fixture();
     f.world.cells[0].grip_settle = -0.1;
     expect(f.check(), "orders.json", "cells[0].grip_settle", |p| {
         matches!(p, ArtifactProblem::TimeOutOfRange { .. })
@@ -723,4 +728,29 @@ fn settle_times_are_written_only_when_not_the_defaults() {
         (back.grip_settle, back.release_settle, back.descent),
         (0.25, 0.0, 0.3)
     );
+}
+
+#[test]
+fn a_cells_joint_limits_replace_the_arms_then_its_speed_scales_them() {
+    let f = fixture();
+    let mut cell = f.world.cells[0].clone();
+    let own = crate::episode::cell_arm(&cell).expect("an arm").limits;
+    let json = serde_json::to_value(&cell).expect("serialises");
+    assert!(json.get("acceleration").is_none() && json.get("jerk").is_none());
+    cell.acceleration = Some([1.0, 1.5, 2.0, 2.5, 3.0, 3.5]);
+    cell.jerk = Some([5.0; 6]);
+    cell.speed = 0.5;
+    let json = serde_json::to_value(&cell).expect("serialises");
+    let back: CellRecord = serde_json::from_value(json).expect("reads");
+    assert_eq!(
+        (back.acceleration, back.jerk),
+        (cell.acceleration, cell.jerk)
+    );
+    let arm = crate::episode::cell_arm(&back).expect("an arm");
+    for (j, (l, o)) in arm.limits.iter().zip(&own).enumerate() {
+        assert_eq!(l.acceleration, [1.0, 1.5, 2.0, 2.5, 3.0, 3.5][j] * 0.25);
+        assert_eq!(l.jerk, 5.0 * 0.125);
+        assert_eq!(l.velocity, o.velocity * 0.5);
+        assert_eq!((l.lower, l.upper), (o.lower, o.upper));
+    }
 }
