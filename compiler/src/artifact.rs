@@ -1,6 +1,7 @@
 //! The JSON artifacts' schema (written by `emit`, read back by `show` and
 //! the runtime). Field names are part of the documented format.
 
+use crate::model::{DEFAULT_GRIP_SETTLE, DEFAULT_RELEASE_SETTLE};
 use serde::{Deserialize, Serialize};
 
 /// 2: demonstrations moved out of `manifest.json` into
@@ -177,6 +178,31 @@ pub struct CellRecord {
     /// artifacts: full speed).
     #[serde(default = "full_speed", skip_serializing_if = "at_full_speed")]
     pub speed: f64,
+    /// Seconds the arm waits after the suction grips (absent in older
+    /// artifacts and when the default: [`DEFAULT_GRIP_SETTLE`]).
+    #[serde(
+        default = "default_grip_settle",
+        skip_serializing_if = "is_default_grip_settle"
+    )]
+    pub grip_settle: f64,
+    /// Seconds the arm waits after the suction releases (absent in older
+    /// artifacts and when the default: [`DEFAULT_RELEASE_SETTLE`]).
+    #[serde(
+        default = "default_release_settle",
+        skip_serializing_if = "is_default_release_settle"
+    )]
+    pub release_settle: f64,
+    /// The guarded descent's speed, a share of the cell's speed (absent in
+    /// older artifacts and when 1: the cell's speed).
+    #[serde(default = "full_speed", skip_serializing_if = "at_full_speed")]
+    pub descent: f64,
+    /// The arm's acceleration limits (rad/s², base first) in place of its
+    /// own (absent: its own).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub acceleration: Option<[f64; 6]>,
+    /// The arm's jerk limits (rad/s³) in place of its own (absent: its own).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jerk: Option<[f64; 6]>,
     pub pending: RectRecord,
     pub boxes: Vec<BoxRecord>,
     pub slots: Vec<SlotRecord>,
@@ -286,4 +312,22 @@ pub fn full_speed() -> f64 {
 
 fn at_full_speed(speed: &f64) -> bool {
     *speed == 1.0
+}
+
+/// The grip settle time of a cell that declares none.
+pub fn default_grip_settle() -> f64 {
+    DEFAULT_GRIP_SETTLE
+}
+
+fn is_default_grip_settle(s: &f64) -> bool {
+    *s == DEFAULT_GRIP_SETTLE
+}
+
+/// The release settle time of a cell that declares none.
+pub fn default_release_settle() -> f64 {
+    DEFAULT_RELEASE_SETTLE
+}
+
+fn is_default_release_settle(s: &f64) -> bool {
+    *s == DEFAULT_RELEASE_SETTLE
 }

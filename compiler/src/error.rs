@@ -70,6 +70,43 @@ pub enum Error {
         percent: f64,
         min_percent: f64,
     },
+    #[error(
+        "the settle time after a {after} must be between {min_ms} ms and {max_ms} ms, not {ms} ms"
+    )]
+    SettleOutOfRange {
+        at: Loc,
+        after: &'static str,
+        ms: f64,
+        min_ms: f64,
+        max_ms: f64,
+    },
+    #[error(
+        "the descent's speed must be between {min_percent} % and 100 % of the cell's speed, not {percent} %"
+    )]
+    DescentOutOfRange {
+        at: Loc,
+        percent: f64,
+        min_percent: f64,
+    },
+    #[error("`{statement}` gives one value per joint: {expected}, not {found}")]
+    JointCount {
+        at: Loc,
+        statement: &'static str,
+        found: usize,
+        expected: usize,
+    },
+    #[error(
+        "the {statement} limit of joint {joint} must be between {min} and {max} {unit}, not {value}"
+    )]
+    JointLimitOutOfRange {
+        at: Loc,
+        statement: &'static str,
+        joint: usize,
+        value: f64,
+        min: f64,
+        max: f64,
+        unit: &'static str,
+    },
     #[error("slot `{slot}` is outside box `{box_name}`")]
     SlotOutsideBox {
         at: Loc,
@@ -237,6 +274,9 @@ impl Error {
             Error::SlotBeforeBox { .. } => "E024",
             Error::BadGeometry { .. } => "E025",
             Error::SpeedOutOfRange { .. } => "E026",
+            Error::SettleOutOfRange { .. } => "E027",
+            Error::DescentOutOfRange { .. } => "E028",
+            Error::JointCount { .. } | Error::JointLimitOutOfRange { .. } => "E029",
             Error::SlotOutsideBox { .. } => "E030",
             Error::SlotsOverlap { .. } => "E031",
             Error::SlotTaken { .. } => "E032",
@@ -278,6 +318,10 @@ impl Error {
             | Error::SlotBeforeBox { at, .. }
             | Error::BadGeometry { at, .. }
             | Error::SpeedOutOfRange { at, .. }
+            | Error::SettleOutOfRange { at, .. }
+            | Error::DescentOutOfRange { at, .. }
+            | Error::JointCount { at, .. }
+            | Error::JointLimitOutOfRange { at, .. }
             | Error::SlotOutsideBox { at, .. }
             | Error::SlotsOverlap { at, .. }
             | Error::SlotTaken { at, .. }
@@ -318,6 +362,10 @@ impl Error {
             Error::SlotBeforeBox { .. } => "no box declared above this slot".into(),
             Error::BadGeometry { .. } => "here".into(),
             Error::SpeedOutOfRange { .. } => "out of range".into(),
+            Error::SettleOutOfRange { .. } => "out of range".into(),
+            Error::DescentOutOfRange { .. } => "out of range".into(),
+            Error::JointCount { found, .. } => format!("{found} values"),
+            Error::JointLimitOutOfRange { .. } => "out of range".into(),
             Error::SlotOutsideBox { by_mm, .. } => format!("{by_mm:.0} mm outside the box"),
             Error::SlotsOverlap { .. } => "too close to the other slot".into(),
             Error::SlotTaken { .. } => "slot already taken".into(),
@@ -389,6 +437,10 @@ impl Error {
             Error::SlotBeforeBox { .. } => "declare the `box` before its slots: a slot belongs to the box above it".into(),
             Error::BadGeometry { fix, .. } => fix.clone(),
             Error::SpeedOutOfRange { min_percent, .. } => format!("write a share of the arm's full speed from `speed {min_percent} %` to `speed 100 %` (the default, the robot's own limits), or as a fraction (`speed 0.5`); the motions keep their paths and take 1/speed as long"),
+            Error::SettleOutOfRange { after, min_ms, max_ms, .. } => format!("write a time from `settle {min_ms} ms after {after}` to `settle {max_ms} ms after {after}` (the default: `settle 100 ms after grip`, `settle 500 ms after release`); the arm waits that long, still, after the suction switches"),
+            Error::DescentOutOfRange { min_percent, .. } => format!("write a share of the cell's speed from `descent {min_percent} %` to `descent 100 %` (the default: as fast as every other motion), or as a fraction (`descent 0.25`); the descent from the hover onto a product's top face keeps its path and takes 1/descent as long"),
+            Error::JointCount { statement, expected, .. } => format!("write {expected} plain numbers, base first, e.g. `{statement} {}`; leave the statement out for the arm's own limits", if *statement == "jerk" { "(10, 10, 10, 20, 20, 20)" } else { "(2.5, 2.5, 2.5, 4, 4, 4)" }),
+            Error::JointLimitOutOfRange { statement, min, max, unit, .. } => format!("write a {statement} limit from {min} to {max} {unit} for each joint, or leave the statement out for the arm's own limits (the built-in UR10's: `acceleration (2.5, 2.5, 2.5, 4, 4, 4)`, `jerk (10, 10, 10, 20, 20, 20)`)"),
             Error::SlotOutsideBox { .. } => "move the slot inside the box footprint (box centre ± width/2, ± depth/2)".into(),
             Error::SlotsOverlap { .. } => "slots must be at least 10 mm apart; move or remove one".into(),
             Error::SlotTaken { .. } => "give each product its own slot".into(),

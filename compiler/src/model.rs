@@ -18,6 +18,26 @@ pub const SUCTION_RANGE: (f64, f64) = (0.020, 0.300);
 pub const LIFT_RANGE: (f64, f64) = (0.020, 0.500);
 /// The speeds a cell may declare, as shares of the arm's full speed.
 pub const SPEED_RANGE: (f64, f64) = (0.01, 1.0);
+/// How long the arm waits, still, after the suction grips a product when
+/// a cell gives no `settle … after grip` (s): the vacuum builds up.
+pub const DEFAULT_GRIP_SETTLE: f64 = 0.1;
+/// How long the arm waits, still, after releasing a product when a cell
+/// gives no `settle … after release` (s): the product drops and comes to
+/// rest before the cup backs up.
+pub const DEFAULT_RELEASE_SETTLE: f64 = 0.5;
+/// The settle times a cell may declare (s).
+pub const SETTLE_RANGE: (f64, f64) = (0.0, 5.0);
+/// The descent speeds a cell may declare, as shares of its speed.
+pub const DESCENT_RANGE: (f64, f64) = (0.01, 1.0);
+/// How many joints the arm has: an `acceleration` or `jerk` statement
+/// gives one value per joint.
+pub const ARM_JOINTS: usize = 6;
+/// The joint acceleration limits a cell may declare (rad/s²): bounds of
+/// sense, not the arm's own (the built-in UR10's are 2.5 and 4 rad/s²).
+pub const ACCELERATION_RANGE: (f64, f64) = (0.1, 40.0);
+/// The joint jerk limits a cell may declare (rad/s³; the built-in UR10's
+/// are 10 and 20 rad/s³).
+pub const JERK_RANGE: (f64, f64) = (1.0, 2000.0);
 /// UR10 reach, measured horizontally from the base axis.
 pub const UR10_REACH_MIN: f64 = 0.20;
 pub const UR10_REACH_MAX: f64 = 1.30;
@@ -97,6 +117,20 @@ pub struct Cell {
     /// (velocity limits times `speed`, accelerations times its square,
     /// jerks times its cube).
     pub speed: f64,
+    /// Seconds the arm waits, still, after the suction grips a product.
+    pub grip_settle: f64,
+    /// Seconds the arm waits, still, after the suction releases a product.
+    pub release_settle: f64,
+    /// The guarded descent onto a product's top face (from the hover to
+    /// the contact) as a share of the cell's speed (1: no slower than
+    /// every other motion).
+    pub descent: f64,
+    /// The arm's acceleration limits (rad/s², base first) in place of its
+    /// own (the URDF's, or the built-in UR10's), before `speed` scales
+    /// them; `None`: its own.
+    pub acceleration: Option<[f64; ARM_JOINTS]>,
+    /// The arm's jerk limits (rad/s³), as `acceleration`.
+    pub jerk: Option<[f64; ARM_JOINTS]>,
     pub boxes: Vec<BoxDef>,
     pub slots: Vec<Slot>,
 }

@@ -260,6 +260,44 @@ impl Resolver<'_> {
         false
     }
 
+    /// One limit per joint, each in `range` (reported in `unit`): the
+    /// values, or `None` after reporting a wrong count or each value out
+    /// of range.
+    fn joint_values(
+        &mut self,
+        f: FileId,
+        v: &ast::JointValues,
+        statement: &'static str,
+        (min, max): (f64, f64),
+        unit: &'static str,
+    ) -> Option<[f64; ARM_JOINTS]> {
+        let Ok(values) = <[ast::Fraction; ARM_JOINTS]>::try_from(v.values.clone()) else {
+            self.errors.push(Error::JointCount {
+                at: Loc::new(f, v.span),
+                statement,
+                found: v.values.len(),
+                expected: ARM_JOINTS,
+            });
+            return None;
+        };
+        let mut ok = true;
+        for (j, value) in values.iter().enumerate() {
+            if !(min..=max).contains(&value.value) {
+                self.errors.push(Error::JointLimitOutOfRange {
+                    at: Loc::new(f, value.span),
+                    statement,
+                    joint: j + 1,
+                    value: value.value,
+                    min,
+                    max,
+                    unit,
+                });
+                ok = false;
+            }
+        }
+        ok.then(|| values.map(|v| v.value))
+    }
+
     /// A position on the table: `(x, y)`, or `(x, y, 0)`. Products stand
     /// on the table and box floors lie on it, so another height is an error.
     fn table_point(&mut self, p: &ast::Point, f: FileId) -> [f64; 2] {
@@ -285,6 +323,11 @@ impl Resolver<'_> {
         let mut pending = Once::new("pending");
         let mut lift = Once::new("lift");
         let mut speed = Once::new("speed");
+        let mut grip_settle = Once::new("settle … after grip");
+        let mut release_settle = Once::new("settle … after release");
+        let mut descent = Once::new("descent");
+        let mut acceleration = Once::new("acceleration");
+        let mut jerk = Once::new("jerk");
         let mut boxes: Vec<BoxDef> = Vec::new();
         let mut slots: Vec<Slot> = Vec::new();
         let mut ok = true;
@@ -351,6 +394,47 @@ impl Resolver<'_> {
                         ok = false;
                     }
                     speed.set(s.value, sl, &mut self.errors);
+                }
+                ast::CellStmt::Acceleration(v) => {
+                    let values =
+                        self.joint_values(f, v, "acceleration", ACCELERATION_RANGE, "rad/s²");
+                    ok &= values.is_some();
+                    acceleration.set(values, sl, &mut self.errors);
+                }
+                ast::CellStmt::Jerk(v) => {
+                    let values = self.joint_values(f, v, "jerk", JERK_RANGE, "rad/s³");
+                    ok &= values.is_some();
+                    jerk.set(values, sl, &mut self.errors);
+                }
+                ast::CellStmt::Descent(s) => {
+                    let (lo, hi) = DESCENT_RANGE;
+                    if !(lo..=hi).contains(&s.value) {
+                        self.errors.push(Error::DescentOutOfRange {
+                            at: Loc::new(f, s.span),
+                            percent: s.value * 100.0,
+                            min_percent: lo * 100.0,
+                        });
+                        ok = false;
+                    }
+                    descent.set(s.value, sl, &mut self.errors);
+                }
+                ast::CellStmt::Settle { time, after } => {
+                    let (lo, hi) = SETTLE_RANGE;
+                    if !(lo..=hi).contains(&time.seconds) {
+                        self.errors.push(Error::SettleOutOfRange {
+                            at: Loc::new(f, time.span),
+                            after: after.as_str(),
+                            ms: time.seconds * 1000.0,
+                            min_ms: lo * 1000.0,
+                            max_ms: hi * 1000.0,
+                        });
+                        ok = false;
+                    }
+                    let once = match after {
+                        ast::SettleAfter::Grip => &mut grip_settle,
+                        ast::SettleAfter::Release => &mut release_settle,
+                    };
+                    once.set(time.seconds, sl, &mut self.errors);
                 }
                 ast::CellStmt::Pending(a, b) => {
                     let (a, b) = (self.table_point(a, f), self.table_point(b, f));
@@ -442,6 +526,11 @@ impl Resolver<'_> {
         );
         let lift = lift.get().unwrap_or(DEFAULT_LIFT);
         let speed = speed.get().unwrap_or(1.0);
+        let grip_settle = grip_settle.get().unwrap_or(DEFAULT_GRIP_SETTLE);
+        let release_settle = release_settle.get().unwrap_or(DEFAULT_RELEASE_SETTLE);
+        let descent = descent.get().unwrap_or(1.0);
+        let acceleration = acceleration.get().flatten();
+        let jerk = jerk.get().flatten();
         if boxes.is_empty() {
             e.push(Error::MissingStatement {
                 at: block,
@@ -474,6 +563,11 @@ impl Resolver<'_> {
             pending,
             lift,
             speed,
+            grip_settle,
+            release_settle,
+            descent,
+            acceleration,
+            jerk,
             boxes,
             slots,
         });

@@ -24,6 +24,9 @@ fn bench() -> CellScene {
         suction: 0.1,
         lift: 0.15,
         speed: 1.0,
+        grip_settle: 0.1,
+        release_settle: 0.5,
+        descent: 1.0,
         pending: ([0.45, -0.50], [0.85, -0.10]),
         boxes: vec![BoxSpec {
             name: "tray".into(),

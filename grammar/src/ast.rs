@@ -115,6 +115,56 @@ pub struct Mass {
     pub span: Span,
 }
 
+/// Time units accepted by the language.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TimeUnit {
+    Ms,
+    S,
+}
+
+impl TimeUnit {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            TimeUnit::Ms => "ms",
+            TimeUnit::S => "s",
+        }
+    }
+    pub fn seconds(self) -> f64 {
+        match self {
+            TimeUnit::Ms => 0.001,
+            TimeUnit::S => 1.0,
+        }
+    }
+}
+
+/// A time, converted to seconds (`100 ms`, `0.5 s`, or a bare number of
+/// seconds).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Time {
+    pub seconds: f64,
+    /// The number as written.
+    pub number: String,
+    pub unit: Option<TimeUnit>,
+    pub span: Span,
+}
+
+/// When the suction's settle time runs: after it grips a product (the
+/// suction switched on at the top face) or after it releases one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SettleAfter {
+    Grip,
+    Release,
+}
+
+impl SettleAfter {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SettleAfter::Grip => "grip",
+            SettleAfter::Release => "release",
+        }
+    }
+}
+
 /// A plain whole number (counts, seeds, batch sizes).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Count {
@@ -203,6 +253,27 @@ pub enum CellStmt {
     Lift(Length),
     /// The arm's speed, a share of its full speed.
     Speed(Share),
+    /// How long the arm waits, still, after the suction grips or releases
+    /// (`settle 100 ms after grip`).
+    Settle {
+        time: Time,
+        after: SettleAfter,
+    },
+    /// The speed of the guarded descent onto a product's top face, a share
+    /// of the cell's speed.
+    Descent(Share),
+    /// The arm's acceleration limits, rad/s², one per joint.
+    Acceleration(JointValues),
+    /// The arm's jerk limits, rad/s³, one per joint.
+    Jerk(JointValues),
+}
+
+/// One plain number per joint, base first (`(2.5, 2.5, 2.5, 4, 4, 4)`);
+/// as many as written (the compiler checks the count).
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointValues {
+    pub values: Vec<Fraction>,
+    pub span: Span,
 }
 
 #[derive(Debug, Clone, PartialEq)]

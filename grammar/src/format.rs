@@ -322,6 +322,13 @@ fn cell_stmt(s: &CellStmt) -> String {
         CellStmt::Lift(l) => format!("lift {}", length(l)),
         CellStmt::Speed(s) if s.percent => format!("speed {} %", s.number),
         CellStmt::Speed(s) => format!("speed {}", s.number),
+        CellStmt::Descent(s) if s.percent => format!("descent {} %", s.number),
+        CellStmt::Descent(s) => format!("descent {}", s.number),
+        CellStmt::Acceleration(v) => format!("acceleration {}", joint_values(v)),
+        CellStmt::Jerk(v) => format!("jerk {}", joint_values(v)),
+        CellStmt::Settle { time: t, after } => {
+            format!("settle {} after {}", time(t), after.as_str())
+        }
     }
 }
 
@@ -329,6 +336,18 @@ fn length(l: &Length) -> String {
     match l.unit {
         Some(u) => format!("{} {}", l.number, u.as_str()),
         None => l.number.clone(),
+    }
+}
+
+fn joint_values(v: &JointValues) -> String {
+    let numbers: Vec<&str> = v.values.iter().map(|f| f.number.as_str()).collect();
+    format!("({})", numbers.join(", "))
+}
+
+fn time(t: &Time) -> String {
+    match t.unit {
+        Some(u) => format!("{} {}", t.number, u.as_str()),
+        None => t.number.clone(),
     }
 }
 

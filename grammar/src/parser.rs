@@ -106,6 +106,12 @@ fn describe(rule: Rule) -> Option<&'static str> {
         Rule::kw_slot => "`slot`",
         Rule::kw_lift => "`lift`",
         Rule::kw_speed => "`speed`",
+        Rule::kw_settle => "`settle`",
+        Rule::kw_descent => "`descent`",
+        Rule::kw_acceleration => "`acceleration`",
+        Rule::kw_jerk => "`jerk`",
+        Rule::kw_after => "`after`",
+        Rule::settle_event => "`grip` or `release`",
         Rule::kw_cube => "`cube`",
         Rule::kw_mass => "`mass`",
         Rule::kw_customer => "`customer`",
@@ -355,7 +361,28 @@ impl Builder {
                 Rule::base_stmt => CellStmt::Base(self.point(k.remove(1))),
                 Rule::suction_stmt => CellStmt::Suction(self.length(k.remove(1))),
                 Rule::lift_stmt => CellStmt::Lift(self.length(k.remove(1))),
-                Rule::speed_stmt => CellStmt::Speed(self.share(k.remove(1))),
+                Rule::speed_stmt => CellStmt::Speed(
+                    self.share(k.remove(1), "`%`, or no unit for a fraction (`speed 0.5`)"),
+                ),
+                Rule::descent_stmt => CellStmt::Descent(self.share(
+                    k.remove(1),
+                    "`%`, or no unit for a fraction (`descent 0.25`)",
+                )),
+                Rule::acceleration_stmt => {
+                    CellStmt::Acceleration(self.joint_values(k.remove(1), "an acceleration"))
+                }
+                Rule::jerk_stmt => CellStmt::Jerk(self.joint_values(k.remove(1), "a jerk")),
+                Rule::settle_stmt => {
+                    let after = if k.get(3).is_some_and(|e| e.as_str() == "grip") {
+                        SettleAfter::Grip
+                    } else {
+                        SettleAfter::Release
+                    };
+                    CellStmt::Settle {
+                        time: self.time(k.remove(1)),
+                        after,
+                    }
+                }
                 Rule::pending_stmt => {
                     let to = self.point(k.remove(3));
                     let from = self.point(k.remove(1));
@@ -772,8 +799,35 @@ impl Builder {
         }
     }
 
-    /// A share: a number with `%`, or a plain fraction.
-    fn share(&mut self, p: P) -> Share {
+    /// A time: `ms` or `s`, or a bare number of seconds.
+    fn time(&mut self, p: P) -> Time {
+        let (number, value, unit, s) = self.quantity(p);
+        let unit = match unit {
+            None => None,
+            Some((u, us)) => match u.as_str() {
+                "ms" => Some(TimeUnit::Ms),
+                "s" => Some(TimeUnit::S),
+                _ => {
+                    self.errors.push(SyntaxError::UnknownUnit {
+                        span: us,
+                        unit: u,
+                        allowed: "`ms` or `s` (or no unit for seconds)",
+                    });
+                    None
+                }
+            },
+        };
+        Time {
+            seconds: value * unit.map_or(1.0, TimeUnit::seconds),
+            number,
+            unit,
+            span: s,
+        }
+    }
+
+    /// A share: a number with `%`, or a plain fraction (`allowed` says
+    /// so for the statement's unit error).
+    fn share(&mut self, p: P, allowed: &'static str) -> Share {
         let (number, value, unit, s) = self.quantity(p);
         let percent = match unit {
             None => false,
@@ -782,7 +836,7 @@ impl Builder {
                 self.errors.push(SyntaxError::UnknownUnit {
                     span: us,
                     unit: u,
-                    allowed: "`%`, or no unit for a fraction (`speed 0.5`)",
+                    allowed,
                 });
                 false
             }
@@ -793,6 +847,17 @@ impl Builder {
             percent,
             span: s,
         }
+    }
+
+    /// A parenthesised list of plain numbers, one per joint.
+    fn joint_values(&mut self, p: P, what: &'static str) -> JointValues {
+        let s = span(&p);
+        let values = p
+            .into_inner()
+            .filter(|q| q.as_rule() == Rule::quantity)
+            .map(|q| self.fraction(q, what))
+            .collect();
+        JointValues { values, span: s }
     }
 
     fn fraction(&mut self, p: P, what: &'static str) -> Fraction {

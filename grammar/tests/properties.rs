@@ -407,7 +407,9 @@ const KEYWORDS: &[&str] = &[
     "for", "robot", "ur10", "urdf", "base", "suction", "pending", "to", "box", "size", "slot",
     "lift", "cube", "mass", "customer", "batch", "sequence", "at", "choose", "of", "into", "keep",
     "jitter", "repeat", "seed", "human", "packed", "packs", "missing", "count", "ascending",
-    "descending", "listed", "random", "mm", "cm", "m", "kg", "g",
+    "descending", "listed", "random", "mm", "cm", "m", "kg", "g", "speed", "settle", "after", "descent",
+    "acceleration", "jerk",
+    "grip", "release", "ms", "s",
 ];
 
 /// An identifier; sometimes one spelled like a keyword or unit (the grammar
@@ -540,6 +542,42 @@ fn cell_stmt() -> impl Strategy<Value = Vec<Tok>> {
         ])),
         (name(), point()).prop_map(|(n, at)| toks(vec![vec![w("slot"), Tok::W(n)], at])),
         size().prop_map(|q| toks(vec![vec![w("lift")], q])),
+        (
+            select(&["speed", "descent"][..]),
+            number(150, false),
+            prop::option::of(Just("%"))
+        )
+            .prop_map(|(kw, n, u)| {
+                let mut t = vec![w(kw), Tok::W(n)];
+                t.extend(u.map(Tok::U));
+                t
+            }),
+        (
+            select(&["acceleration", "jerk"][..]),
+            vec(number(99, true), 1..8)
+        )
+            .prop_map(|(kw, values)| {
+                let mut t = vec![w(kw), Tok::P("(")];
+                for (i, v) in values.into_iter().enumerate() {
+                    if i > 0 {
+                        t.push(Tok::P(","));
+                    }
+                    t.push(Tok::W(v));
+                }
+                t.push(Tok::P(")"));
+                t
+            }),
+        (
+            number(9999, true),
+            prop::option::of(select(&["ms", "s"][..])),
+            select(&["grip", "release"][..]),
+        )
+            .prop_map(|(n, u, after)| {
+                let mut t = vec![w("settle"), Tok::W(n)];
+                t.extend(u.map(Tok::U));
+                t.extend([w("after"), w(after)]);
+                t
+            }),
     ]
 }
 

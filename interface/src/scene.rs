@@ -35,6 +35,16 @@ pub struct CellScene {
     /// The arm's speed, a share of its full speed (the arm's limits are
     /// scaled by it where the episode is built).
     pub speed: f64,
+    /// Seconds the arm waits, still, after the suction grips a product
+    /// (the vacuum builds up) before it lifts.
+    pub grip_settle: f64,
+    /// Seconds the arm waits, still, after the suction releases a product
+    /// (it drops and comes to rest) before it backs up.
+    pub release_settle: f64,
+    /// The guarded descent onto a product's top face (from the hover to
+    /// the contact), a share of the cell's speed in (0, 1]: that motion is
+    /// slowed as [`speed`](CellScene::speed) slows every motion.
+    pub descent: f64,
     /// The pending area's corners (min, max).
     pub pending: ([f64; 2], [f64; 2]),
     pub boxes: Vec<BoxSpec>,

@@ -90,6 +90,25 @@ impl Arm {
         packwright_interface::joints::within(&self.limits, q)
     }
 
+    /// The arm with its acceleration and jerk limits replaced, joint by
+    /// joint (base first), where given (a cell's `acceleration` and
+    /// `jerk`); positions and velocities keep the arm's own.
+    pub fn with_dynamics(
+        mut self,
+        acceleration: Option<[f64; DOF]>,
+        jerk: Option<[f64; DOF]>,
+    ) -> Arm {
+        for (j, l) in self.limits.iter_mut().enumerate() {
+            if let Some(a) = acceleration {
+                l.acceleration = a[j];
+            }
+            if let Some(k) = jerk {
+                l.jerk = k[j];
+            }
+        }
+        self
+    }
+
     /// The arm slowed to `speed` (a share of its full speed, in (0, 1]; as
     /// the teach pendant's speed slider does): every motion keeps its path
     /// and takes `1 / speed` as long, with velocity limits times `speed`,

@@ -318,6 +318,37 @@ pub fn blend_capped(
     waypoints: &[Joints],
     caps: &[f64],
 ) -> Result<Blended, SmoothingError> {
+    blend_slowed(limits, start, waypoints, caps, &[])
+}
+
+/// `limits` slowed to `share` of their speed (in (0, 1)), as the teach
+/// pendant's speed slider does: velocities times `share`, accelerations
+/// times its square, jerks times its cube, so a rest-to-rest leg keeps its
+/// path and takes `1 / share` as long.
+pub fn slowed(limits: &[Limits; DOF], share: f64) -> [Limits; DOF] {
+    let mut out = *limits;
+    for l in &mut out {
+        l.velocity *= share;
+        l.acceleration *= share * share;
+        l.jerk *= share * share * share;
+    }
+    out
+}
+
+/// [`blend_capped`] with a speed per leg: leg `k` (the one reaching
+/// waypoint `k`) is the rest-to-rest leg within `limits` [`slowed`] to
+/// `speeds[k]` when that is in (0, 1) (a missing entry, or any other
+/// value, is full speed). The transitions keep `limits`: a slowed leg is
+/// on its straight segment, at its own speed, wherever no transition
+/// shapes it; next to a stop that is at least [`MIN_STRAIGHT`] of its
+/// time (a guarded descent onto a top face).
+pub fn blend_slowed(
+    limits: [Limits; DOF],
+    start: Joints,
+    waypoints: &[Joints],
+    caps: &[f64],
+    speeds: &[f64],
+) -> Result<Blended, SmoothingError> {
     let (mut otg, mut input) = ruckig_input(&limits, start)?;
     for (i, w) in waypoints.iter().enumerate() {
         crate::smoothing::check_position(&limits, w, Position::Waypoint(i))?;
@@ -325,7 +356,14 @@ pub fn blend_capped(
     let mut legs: Vec<Leg> = Vec::with_capacity(waypoints.len());
     let mut from = start;
     for (i, w) in waypoints.iter().enumerate() {
-        legs.push(leg(&mut otg, &mut input, from, *w, i)?);
+        let share = speeds.get(i).copied().unwrap_or(1.0);
+        let l = if share > 0.0 && share < 1.0 {
+            let (mut slow_otg, mut slow_input) = ruckig_input(&slowed(&limits, share), from)?;
+            leg(&mut slow_otg, &mut slow_input, from, *w, i)?
+        } else {
+            leg(&mut otg, &mut input, from, *w, i)?
+        };
+        legs.push(l);
         from = *w;
     }
     let dt = CONTROL_PERIOD;

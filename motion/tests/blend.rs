@@ -3,7 +3,7 @@
 //! stopping everywhere is what `smooth_path` commands.
 
 use packwright_kinematics::{Arm, DOF, Joints, Limits};
-use packwright_motion::blend::blend;
+use packwright_motion::blend::{blend, blend_capped, blend_slowed, slowed};
 use packwright_motion::smoothing::{CONTROL_PERIOD, smooth_path};
 use proptest::prelude::*;
 
@@ -179,5 +179,62 @@ proptest! {
             }
             last = *q;
         }
+    }
+}
+
+#[test]
+fn a_slowed_leg_keeps_its_path_at_its_own_speed() {
+    // Hover, then down onto a top face (a stop): the descent at a quarter
+    // of the speed takes four times as long on the same straight segment,
+    // within the slowed limits wherever no transition shapes it (its
+    // second half at least, next to the stop), and within the arm's
+    // everywhere; the leg before it is unchanged.
+    let limits = ur10();
+    let hover = [0.4, -1.2, 1.5, -1.8, -1.57, 0.4];
+    let top = [0.4, -1.1, 1.6, -2.0, -1.57, 0.4];
+    let waypoints = [hover, top];
+    let full = blend_capped(limits, START, &waypoints, &[]).expect("blends");
+    let slow = blend_slowed(limits, START, &waypoints, &[], &[1.0, 0.25]).expect("blends");
+    check_limits(&limits, START, &slow.samples);
+    assert_eq!(slow.samples.last(), Some(&top));
+    // The descent's own samples, after the transition into it.
+    let descent = |b: &packwright_motion::blend::Blended| b.samples.len() - b.at[0] - 1;
+    let (f, s) = (descent(&full), descent(&slow));
+    assert!(
+        s as f64 > 3.0 * f as f64,
+        "descent {s} samples slowed against {f}"
+    );
+    let quarter = slowed(&limits, 0.25);
+    let second_half = slow.samples.len() - s / 2;
+    // Its velocities and accelerations there (it ends at rest).
+    let mut q = slow.samples[second_half..].to_vec();
+    q.extend([top; 2]);
+    let dt = packwright_motion::smoothing::CONTROL_PERIOD;
+    for w in q.windows(3) {
+        for (j, l) in quarter.iter().enumerate() {
+            let v = (w[2][j] - w[1][j]) / dt;
+            let a = (w[2][j] - 2.0 * w[1][j] + w[0][j]) / dt.powi(2);
+            assert!(
+                v.abs() <= l.velocity * (1.0 + 1e-6),
+                "joint {j} velocity {v}"
+            );
+            assert!(
+                a.abs() <= l.acceleration * (1.0 + 1e-6) + 1e-6,
+                "joint {j} acceleration {a}"
+            );
+        }
+    }
+    // Each sample of the descent's straight part lies on the segment.
+    for q in &slow.samples[second_half..] {
+        let t = (q[1] - hover[1]) / (top[1] - hover[1]);
+        for j in 0..DOF {
+            let on = hover[j] + t * (top[j] - hover[j]);
+            assert!((q[j] - on).abs() < 1e-9, "joint {j}: {} against {on}", q[j]);
+        }
+    }
+    // Full speed, or a share that is no slowing, is blend_capped.
+    for speeds in [&[][..], &[1.0, 1.0], &[0.0, 2.0]] {
+        let same = blend_slowed(limits, START, &waypoints, &[], speeds).expect("blends");
+        assert_eq!(same, full);
     }
 }

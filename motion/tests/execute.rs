@@ -199,6 +199,54 @@ fn execution_is_above_its_lower_bound_and_a_slower_arm_takes_longer() {
 }
 
 #[test]
+fn settle_times_are_the_cells() {
+    // The same order with the default settle times (0.1 s after a grip,
+    // 0.5 s after a release) and with 0.3 s and 0.1 s: each product waits
+    // 0.2 s longer after its grip and 0.4 s less after its release, in its
+    // motion and in its lower bound alike; the paths are the same.
+    let assign = [("C", "g1"), ("A", "g3")];
+    let default = run(&assign, &[], &[], Planner::Expert);
+    let (arm, mut task, mut sim) = episode(&assign, &[], &[]);
+    task.cell.grip_settle = 0.3;
+    task.cell.release_settle = 0.1;
+    let changed = execute::run(&mut sim, &arm, &task, &Planner::Expert);
+    assert_packed(&default);
+    assert_packed(&changed);
+    for (d, c) in default.products.iter().zip(&changed.products) {
+        let moved = (c.execution_s - d.execution_s) + 0.2;
+        assert!(moved.abs() < 1e-9, "{d:?} against {c:?}");
+        let bound = (c.bound_s - d.bound_s) + 0.2;
+        assert!(bound.abs() < 1e-9, "{d:?} against {c:?}");
+    }
+    // No wait at all: the product still drops into its slot.
+    let (arm, mut task, mut sim) = episode(&assign, &[], &[]);
+    task.cell.grip_settle = 0.0;
+    task.cell.release_settle = 0.0;
+    let none = execute::run(&mut sim, &arm, &task, &Planner::Expert);
+    assert_packed(&none);
+}
+
+#[test]
+fn a_guarded_descent_is_slower_and_packs() {
+    // The descent onto each top face at a quarter of the arm's speed: the
+    // same stops (so the same lower bound), more time, still packed, with
+    // the expert and with RRT-Connect.
+    let assign = [("C", "g1"), ("A", "g3")];
+    for planner in [Planner::Expert, Planner::Rrt { seed: 1 }] {
+        let default = run(&assign, &[], &[], planner);
+        let (arm, mut task, mut sim) = episode(&assign, &[], &[]);
+        task.cell.descent = 0.25;
+        let guarded = execute::run(&mut sim, &arm, &task, &planner);
+        assert_packed(&default);
+        assert_packed(&guarded);
+        for (d, g) in default.products.iter().zip(&guarded.products) {
+            assert!(g.execution_s > d.execution_s + 0.1, "{d:?} against {g:?}");
+            assert!((g.bound_s - d.bound_s).abs() < 1e-9, "{d:?} against {g:?}");
+        }
+    }
+}
+
+#[test]
 fn rrt_connect_packs_an_order() {
     let report = run(
         &[("B", "g4"), ("D", "g2")],

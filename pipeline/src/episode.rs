@@ -53,6 +53,9 @@ pub fn scene_of(cell: &CellRecord) -> CellScene {
         suction: cell.suction,
         lift: cell.lift,
         speed: cell.speed,
+        grip_settle: cell.grip_settle,
+        release_settle: cell.release_settle,
+        descent: cell.descent,
         pending: (cell.pending.min, cell.pending.max),
         boxes: cell
             .boxes
@@ -94,6 +97,14 @@ pub fn arm_of(robot: &RobotRecord) -> Result<Arm> {
             })
         }
     }
+}
+
+/// The arm a cell packs with: its robot, with the cell's acceleration and
+/// jerk limits where it gives them, then slowed to the cell's speed.
+pub fn cell_arm(cell: &CellRecord) -> Result<Arm> {
+    Ok(arm_of(&cell.robot)?
+        .with_dynamics(cell.acceleration, cell.jerk)
+        .at_speed(cell.speed))
 }
 
 /// The name of the cell a setup packs in.
@@ -146,7 +157,7 @@ pub fn episode(m: &Model, setup: &Setup) -> Result<Episode> {
         })
         .collect();
     Ok(Episode {
-        arm: arm_of(&cell.robot)?.at_speed(cell.speed),
+        arm: cell_arm(&cell)?,
         task,
         placements,
     })
@@ -264,7 +275,7 @@ pub fn demonstration_episode(world: &WorldFile, demo: &DemonstrationRecord) -> R
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    let arm = arm_of(&cell.robot)?.at_speed(cell.speed);
+    let arm = cell_arm(cell)?;
     Ok(Episode {
         arm,
         task: OrderTask {

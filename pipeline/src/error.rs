@@ -92,6 +92,13 @@ pub enum ArtifactProblem {
     /// A share (of the arm's full speed) outside its checked range.
     #[error("{value} is outside {min}-{max}")]
     ShareOutOfRange { value: f64, min: f64, max: f64 },
+    /// A joint's acceleration (rad/s²) or jerk (rad/s³) limit outside its
+    /// checked range.
+    #[error("{value} is outside {min}-{max}")]
+    LimitOutOfRange { value: f64, min: f64, max: f64 },
+    /// A time in seconds outside its checked range.
+    #[error("{value} s is outside {min}-{max} s")]
+    TimeOutOfRange { value: f64, min: f64, max: f64 },
     /// An integer (a label, a node, an index, a flag) outside `min..=max`.
     #[error("{value} is outside {min}..={max}")]
     OutOfRange { value: i64, min: i64, max: i64 },

@@ -27,6 +27,9 @@ fn cell() -> CellScene {
         suction: SUCTION,
         lift: 0.15,
         speed: 1.0,
+        grip_settle: 0.1,
+        release_settle: 0.5,
+        descent: 1.0,
         pending: ([0.45, -0.5], [0.85, -0.1]),
         boxes: vec![BoxSpec {
             name: "tray".into(),

@@ -95,20 +95,40 @@ pub fn run(args: &ShowArgs) -> anyhow::Result<Exit> {
             RobotRecord::Ur10 => "ur10".to_owned(),
             RobotRecord::Urdf(p) => format!("urdf {p}"),
         };
+        // Settings other than their defaults.
+        let mut settings = String::new();
+        if cell.speed < 1.0 {
+            settings += &format!(", speed {} %", (cell.speed * 1e4).round() / 1e2);
+        }
+        if cell.descent < 1.0 {
+            settings += &format!(", descent {} %", (cell.descent * 1e4).round() / 1e2);
+        }
+        let list = |v: &[f64; 6]| {
+            let v: Vec<String> = v.iter().map(f64::to_string).collect();
+            format!("({})", v.join(", "))
+        };
+        if let Some(a) = &cell.acceleration {
+            settings += &format!(", acceleration {} rad/s²", list(a));
+        }
+        if let Some(j) = &cell.jerk {
+            settings += &format!(", jerk {} rad/s³", list(j));
+        }
+        let ms = |s: f64| (s * 1e6).round() / 1e3;
+        if cell.grip_settle != default_grip_settle() {
+            settings += &format!(", settle {} ms after grip", ms(cell.grip_settle));
+        }
+        if cell.release_settle != default_release_settle() {
+            settings += &format!(", settle {} ms after release", ms(cell.release_settle));
+        }
         writeln!(
             o,
-            "  {}: robot {robot}, base {}, suction {} m, lift {} m, pending {} to {}{}",
+            "  {}: robot {robot}, base {}, suction {} m, lift {} m, pending {} to {}{settings}",
             cell.name,
             p3(cell.base),
             cell.suction,
             cell.lift,
             p2(cell.pending.min),
             p2(cell.pending.max),
-            if cell.speed < 1.0 {
-                format!(", speed {} %", (cell.speed * 1e4).round() / 1e2)
-            } else {
-                String::new()
-            }
         )?;
         writeln!(
             o,

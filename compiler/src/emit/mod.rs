@@ -373,6 +373,11 @@ pub fn cell_record(c: &Cell) -> CellRecord {
         suction: r6(c.suction),
         lift: r6(c.lift),
         speed: r6(c.speed),
+        grip_settle: r6(c.grip_settle),
+        release_settle: r6(c.release_settle),
+        descent: r6(c.descent),
+        acceleration: c.acceleration.map(|a| a.map(r6)),
+        jerk: c.jerk.map(|j| j.map(r6)),
         pending: RectRecord {
             min: r6n(c.pending.min),
             max: r6n(c.pending.max),

@@ -289,6 +289,12 @@ impl<W: World> Learned<'_, W> {
         let mut gripped: Option<Held> = None;
         for (k, switch) in schedule(plan.stage).into_iter().enumerate() {
             let load = gripped.as_ref().map_or(plan.load, Load::holding);
+            // The motion onto a top face is the guarded descent.
+            let load = if switch == Suction::On {
+                load.guarded(self.station.task.cell.descent)
+            } else {
+                load
+            };
             let started = self.station.begin();
             let tool = f32s(self.station.tip(&start));
             let mut goal = self

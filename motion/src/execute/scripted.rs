@@ -134,7 +134,14 @@ impl<W: World> Scripted<'_, W> {
         let mut start = leg_end(&pending).unwrap_or_else(|| self.station.world.observe().joints);
         let mut replanned = false;
         let mut legs = pending;
+        let descent = self.station.task.cell.descent;
         for ((k, planned), load) in plan.into_iter().enumerate().zip(loads) {
+            // The motion onto a top face is the guarded descent.
+            let load = if planned.goal.suction == Suction::On {
+                load.guarded(descent)
+            } else {
+                load
+            };
             let started = self.station.begin();
             let how = match self.connect {
                 Connect::Rrt { seed } => Connect::Rrt {

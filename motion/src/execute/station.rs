@@ -8,7 +8,7 @@
 //! Invariant: nothing reaches the world that [`checked_blend`] did not
 //! return.
 
-use crate::blend::{Blended, blend_capped};
+use crate::blend::{Blended, blend_slowed};
 use crate::collision::{Checker, Held, MAX_STEP, ProductBody};
 use crate::expert::{SubGoal, Suction};
 use crate::rrt::{self, Query, RrtConfig};
@@ -32,10 +32,6 @@ pub(crate) const MAX_RAISES: u32 = 100;
 /// The lowest a lift may be lowered to, above where the cup gripped (m):
 /// the cell language's smallest `lift`.
 pub(crate) const MIN_LIFT: f64 = 0.02;
-/// Cycles to wait after switching the suction on (0.1 s).
-const SUCTION_SETTLE: usize = 50;
-/// Cycles to let a released product settle (0.5 s).
-const RELEASE_SETTLE: usize = 250;
 /// Height of the cup tip in the start pose.
 pub const HOME_HEIGHT: f64 = 0.35;
 
@@ -57,6 +53,7 @@ pub(crate) struct Leg {
     pub suction: Suction,
     pub held: Option<Held>,
     pub ignore: Option<String>,
+    pub speed: f64,
 }
 
 /// Where the last of `legs` leaves the arm.
@@ -71,6 +68,7 @@ impl Leg {
             suction,
             held: load.held.cloned(),
             ignore: load.ignore.map(str::to_owned),
+            speed: load.speed,
         }
     }
 
@@ -78,6 +76,7 @@ impl Leg {
         Load {
             held: self.held.as_ref(),
             ignore: self.ignore.as_deref(),
+            speed: self.speed,
         }
     }
 }
@@ -124,11 +123,22 @@ pub(crate) struct Clock {
 }
 
 /// What a motion carries and may touch: the product held, and the one
-/// being picked (not an obstacle).
-#[derive(Debug, Clone, Copy, Default)]
+/// being picked (not an obstacle); and how fast it moves.
+#[derive(Debug, Clone, Copy)]
 pub struct Load<'h> {
     pub held: Option<&'h Held>,
     pub ignore: Option<&'h str>,
+    /// The share of the arm's speed the motion moves at: 1, but on the
+    /// guarded descent onto a top face the cell's `descent`
+    /// ([`Load::guarded`]; [`blend_slowed`] says how a share in (0, 1)
+    /// slows a leg, and that any other value is full speed).
+    pub speed: f64,
+}
+
+impl Default for Load<'_> {
+    fn default() -> Self {
+        Load::FREE
+    }
 }
 
 impl<'h> Load<'h> {
@@ -136,6 +146,7 @@ impl<'h> Load<'h> {
     pub const FREE: Load<'static> = Load {
         held: None,
         ignore: None,
+        speed: 1.0,
     };
 
     /// Nothing held; the product `name` (being picked, or just released)
@@ -144,6 +155,7 @@ impl<'h> Load<'h> {
         Load {
             held: None,
             ignore: Some(name),
+            speed: 1.0,
         }
     }
 
@@ -152,7 +164,14 @@ impl<'h> Load<'h> {
         Load {
             held: Some(held),
             ignore: None,
+            speed: 1.0,
         }
+    }
+
+    /// This load on the guarded descent onto a top face: the motion at
+    /// `speed` (the cell's `descent`, a share of the arm's speed).
+    pub fn guarded(self, speed: f64) -> Load<'h> {
+        Load { speed, ..self }
     }
 }
 
@@ -574,7 +593,10 @@ impl<'a, W: World> Station<'a, W> {
     }
 
     /// Sends checked commands, then switches the suction and lets things
-    /// settle; fails on any contact the world reports.
+    /// settle, the arm still, for the cell's settle time (its
+    /// `grip_settle` after switching on, `release_settle` after switching
+    /// off, in whole control cycles: [`settle_cycles`]); fails on any
+    /// contact the world reports.
     pub fn send(&mut self, samples: &[Joints], suction: Suction) -> Result<(), Failure> {
         if self.clock.stop.is_none() {
             self.clock.stop = Some(self.world.observe().joints);
@@ -584,15 +606,17 @@ impl<'a, W: World> Station<'a, W> {
             self.world.step()?;
             self.clock.steps += 1;
         }
+        let period = self.world.control_period();
+        let cell = &self.task.cell;
         let settle = match suction {
             Suction::Keep => 0,
             Suction::On => {
                 self.world.set_suction(true)?;
-                SUCTION_SETTLE
+                settle_cycles(cell.grip_settle, period)
             }
             Suction::Off => {
                 self.world.set_suction(false)?;
-                RELEASE_SETTLE
+                settle_cycles(cell.release_settle, period)
             }
         };
         for _ in 0..settle {
@@ -603,7 +627,7 @@ impl<'a, W: World> Station<'a, W> {
             && let Some(&end) = samples.last()
         {
             self.stopped_at(end);
-            self.clock.bound_s += settle as f64 * self.world.control_period();
+            self.clock.bound_s += settle as f64 * period;
         }
         match self.world.take_collisions().into_iter().next() {
             Some(contact) => Err(Failure::Collision { contact }),
@@ -704,6 +728,20 @@ impl<'a, W: World> Station<'a, W> {
 
 pub(crate) use packwright_interface::outcome::SUCCESS_RADIUS;
 
+/// The whole control cycles of `period` seconds a settle time of
+/// `seconds` takes, rounded to the nearest (the default 0.1 s and 0.5 s
+/// are 50 and 250 cycles of 2 ms). A time that is not finite or not
+/// positive, or a period that is not, is no wait.
+pub(crate) fn settle_cycles(seconds: f64, period: f64) -> usize {
+    let cycles = seconds / period;
+    if cycles.is_finite() && cycles > 0.0 {
+        // The compiler bounds settle times to seconds: far below usize.
+        cycles.round() as usize
+    } else {
+        0
+    }
+}
+
 /// The outcome of a measured `row` whose handling ended with `result`:
 /// packed when it rests within [`SUCCESS_RADIUS`] of its goal, else the
 /// failure (the handling's, or how far it was released from its goal).
@@ -772,7 +810,8 @@ const MIN_CAP: f64 = 0.2;
 
 /// [`checked_blend`] with a load per leg: `load_of(k)` for the leg ending
 /// at waypoint `k`; a sample is checked with its leg's load (in an
-/// overlap, the later leg's).
+/// overlap, the later leg's), and the leg moves at its load's speed
+/// ([`blend_slowed`]).
 pub fn checked_blend_by<'h>(
     arm: &Arm,
     checker: &Checker,
@@ -802,8 +841,10 @@ pub fn checked_blend_by<'h>(
         return Err(Unchecked::Collides(hit));
     }
     let mut previous: Option<(Blended, Checked)> = None;
+    // Each leg's speed: its load's (the guarded descent is slowed).
+    let speeds: Vec<f64> = (0..waypoints.len()).map(|k| load_of(k).speed).collect();
     loop {
-        let motion = blend_capped(arm.limits, start, waypoints, &caps)
+        let motion = blend_slowed(arm.limits, start, waypoints, &caps, &speeds)
             .map_err(|e| Unchecked::Smoothing(e.to_string()))?;
         // A capped corner changes the samples from its transition on
         // only: those before it passed in the round before.

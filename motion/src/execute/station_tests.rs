@@ -91,3 +91,14 @@ fn a_switch_on_a_leg_that_does_not_move_happens_at_rest() {
     assert_eq!(world.switches, [(true, Some(a))]);
     assert_eq!(world.commands.last(), Some(&b));
 }
+
+#[test]
+fn settle_times_are_whole_control_cycles() {
+    assert_eq!(settle_cycles(0.1, 0.002), 50);
+    assert_eq!(settle_cycles(0.5, 0.002), 250);
+    assert_eq!(settle_cycles(0.0, 0.002), 0);
+    assert_eq!(settle_cycles(0.0031, 0.002), 2);
+    assert_eq!(settle_cycles(-1.0, 0.002), 0);
+    assert_eq!(settle_cycles(f64::NAN, 0.002), 0);
+    assert_eq!(settle_cycles(0.1, 0.0), 0);
+}

@@ -3,7 +3,7 @@
 //! refused with its file, field and problem.
 
 use super::*;
-use packwright_compiler::artifact::tensor;
+use packwright_compiler::artifact::{CellRecord, tensor};
 use packwright_compiler::{Anywhere, Compiled, MemoryLoader, compile, emit};
 
 const LINE2: &str = include_str!("../../../orders/cells/line2.pack");
@@ -295,6 +295,26 @@ fn numbers_are_finite_and_sizes_positive() {
     f.world.cells[0].suction = 10.0;
     expect(f.check(), "orders.json", "cells[0].suction", |p| {
         matches!(p, ArtifactProblem::LengthOutOfRange { value: 10.0, .. })
+    });
+    let mut f = fixture();
+    f.world.cells[0].release_settle = 60.0;
+    expect(f.check(), "orders.json", "cells[0].release_settle", |p| {
+        matches!(p, ArtifactProblem::TimeOutOfRange { value: 60.0, .. })
+    });
+    let mut f = fixture();
+    f.world.cells[0].descent = 0.0;
+    expect(f.check(), "orders.json", "cells[0].descent", |p| {
+        matches!(p, ArtifactProblem::ShareOutOfRange { value: 0.0, .. })
+    });
+    let mut f = fixture();
+    f.world.cells[0].jerk = Some([10.0, 10.0, 10.0, 20.0, -20.0, 20.0]);
+    expect(f.check(), "orders.json", "cells[0].jerk[4]", |p| {
+        matches!(p, ArtifactProblem::LimitOutOfRange { value: -20.0, .. })
+    });
+    let mut f = fixture();
+    f.world.cells[0].grip_settle = -0.1;
+    expect(f.check(), "orders.json", "cells[0].grip_settle", |p| {
+        matches!(p, ArtifactProblem::TimeOutOfRange { .. })
     });
     let mut f = fixture();
     f.world.cells[0].boxes[0].size[0] = -0.5;
@@ -678,4 +698,59 @@ fn messages_name_the_file_and_the_field() {
         "{message}"
     );
     assert!(message.contains("compile"), "{message}");
+}
+
+#[test]
+fn settle_times_are_written_only_when_not_the_defaults() {
+    // An `orders.json` cell without settle times or descent (as written
+    // before they existed, or with the defaults) reads as the defaults,
+    // and a cell with others keeps them through a write and a read.
+    let f = fixture();
+    let mut cell = f.world.cells[0].clone();
+    let json = serde_json::to_value(&cell).expect("serialises");
+    for key in ["grip_settle", "release_settle", "descent"] {
+        assert!(json.get(key).is_none(), "{key}");
+    }
+    let back: CellRecord = serde_json::from_value(json).expect("reads");
+    assert_eq!(
+        (back.grip_settle, back.release_settle, back.descent),
+        (0.1, 0.5, 1.0)
+    );
+    cell.grip_settle = 0.25;
+    cell.release_settle = 0.0;
+    cell.descent = 0.3;
+    let json = serde_json::to_value(&cell).expect("serialises");
+    assert_eq!(json["grip_settle"], 0.25);
+    assert_eq!(json["release_settle"], 0.0);
+    assert_eq!(json["descent"], 0.3);
+    let back: CellRecord = serde_json::from_value(json).expect("reads");
+    assert_eq!(
+        (back.grip_settle, back.release_settle, back.descent),
+        (0.25, 0.0, 0.3)
+    );
+}
+
+#[test]
+fn a_cells_joint_limits_replace_the_arms_then_its_speed_scales_them() {
+    let f = fixture();
+    let mut cell = f.world.cells[0].clone();
+    let own = crate::episode::cell_arm(&cell).expect("an arm").limits;
+    let json = serde_json::to_value(&cell).expect("serialises");
+    assert!(json.get("acceleration").is_none() && json.get("jerk").is_none());
+    cell.acceleration = Some([1.0, 1.5, 2.0, 2.5, 3.0, 3.5]);
+    cell.jerk = Some([5.0; 6]);
+    cell.speed = 0.5;
+    let json = serde_json::to_value(&cell).expect("serialises");
+    let back: CellRecord = serde_json::from_value(json).expect("reads");
+    assert_eq!(
+        (back.acceleration, back.jerk),
+        (cell.acceleration, cell.jerk)
+    );
+    let arm = crate::episode::cell_arm(&back).expect("an arm");
+    for (j, (l, o)) in arm.limits.iter().zip(&own).enumerate() {
+        assert_eq!(l.acceleration, [1.0, 1.5, 2.0, 2.5, 3.0, 3.5][j] * 0.25);
+        assert_eq!(l.jerk, 5.0 * 0.125);
+        assert_eq!(l.velocity, o.velocity * 0.5);
+        assert_eq!((l.lower, l.upper), (o.lower, o.upper));
+    }
 }

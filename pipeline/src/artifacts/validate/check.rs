@@ -74,6 +74,22 @@ impl Check {
         })
     }
 
+    pub(super) fn time_in(&self, at: &Field, v: f64, range: (f64, f64)) -> Result<()> {
+        self.within(at, v, range, |value, min, max| P::TimeOutOfRange {
+            value,
+            min,
+            max,
+        })
+    }
+
+    pub(super) fn limit_in(&self, at: &Field, v: f64, range: (f64, f64)) -> Result<()> {
+        self.within(at, v, range, |value, min, max| P::LimitOutOfRange {
+            value,
+            min,
+            max,
+        })
+    }
+
     /// `v` finite and in `min..=max`, else the problem `outside` names.
     fn within(
         &self,

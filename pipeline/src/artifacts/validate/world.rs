@@ -5,7 +5,10 @@ use super::check::Check;
 use crate::artifacts::field::Field;
 use crate::error::{ArtifactProblem as P, Result};
 use packwright_compiler::artifact::*;
-use packwright_compiler::model::{LIFT_RANGE, SPEED_RANGE, SUCTION_RANGE};
+use packwright_compiler::model::{
+    ACCELERATION_RANGE, DESCENT_RANGE, JERK_RANGE, LIFT_RANGE, SETTLE_RANGE, SPEED_RANGE,
+    SUCTION_RANGE,
+};
 use std::collections::HashMap;
 
 /// `orders.json`, checked, with its names' indices: what the other files
@@ -154,6 +157,17 @@ fn cell_record(c: &Check, at: &Field, cell: &CellRecord) -> Result<()> {
     c.length_in(&at.key("suction"), cell.suction, SUCTION_RANGE)?;
     c.length_in(&at.key("lift"), cell.lift, LIFT_RANGE)?;
     c.share_in(&at.key("speed"), cell.speed, SPEED_RANGE)?;
+    c.time_in(&at.key("grip_settle"), cell.grip_settle, SETTLE_RANGE)?;
+    c.time_in(&at.key("release_settle"), cell.release_settle, SETTLE_RANGE)?;
+    c.share_in(&at.key("descent"), cell.descent, DESCENT_RANGE)?;
+    for (key, values, range) in [
+        ("acceleration", &cell.acceleration, ACCELERATION_RANGE),
+        ("jerk", &cell.jerk, JERK_RANGE),
+    ] {
+        for (j, v) in values.iter().flatten().enumerate() {
+            c.limit_in(&at.key(key).index(j), *v, range)?;
+        }
+    }
     let pending = at.key("pending");
     let (min, max) = (pending.key("min"), pending.key("max"));
     c.point(&min, &cell.pending.min)?;
