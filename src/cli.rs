@@ -34,11 +34,13 @@ pub enum Command {
     Check(CheckArgs),
     /// Compile .pack files into training artifacts in a directory.
     ///
-    /// Writes manifest.json, labels.json, orders.json, scenarios.json and
-    /// graphs.safetensors (see the README for their format). The directory
-    /// is written atomically: it is replaced only after every file is
-    /// complete, and only if it is empty or holds earlier artifacts. The
-    /// same inputs always give the same bytes.
+    /// Writes manifest.json, labels.json, orders.json, scenarios.json,
+    /// demonstrations.jsonl, combinations.jsonl and graphs.safetensors
+    /// (see the README for their format). Demonstrations are streamed to
+    /// the files, so memory stays small however many are generated. The
+    /// directory is written atomically: it is replaced only after every
+    /// file is complete, and only if it is empty or holds earlier
+    /// artifacts. The same inputs always give the same bytes.
     Compile(CompileArgs),
     /// Summarise a directory of compiled artifacts.
     Show(ShowArgs),
