@@ -234,6 +234,16 @@ pub struct ExecuteArgs {
     /// runs only.
     #[arg(long, value_name = "FILE")]
     pub svg: Option<PathBuf>,
+    /// Also record the run for the Rerun viewer as an .rrd file (written
+    /// atomically): the arm's links as their collision capsules, the
+    /// products and boxes, the tool path and sub-goals, the reasoner's
+    /// decisions and scores, joint positions and velocities, picks,
+    /// releases, collisions and fallbacks, on a `sim_time` timeline
+    /// (entity paths in the README). View it with `rerun FILE` (`pip
+    /// install rerun-sdk==0.36.*`). Needs a build with `--features
+    /// rerun`; simulated runs only.
+    #[arg(long, value_name = "FILE")]
+    pub record: Option<PathBuf>,
     /// Pack on a real UR10 instead of the simulator (`sim`, the default):
     /// `ur10://HOST[:PORT]` or `ur://HOST[:PORT]` (RTDE port, default 30004; the secondary
     /// interface 30002 and the dashboard 29999 on the same host, or
@@ -340,6 +350,14 @@ pub struct EvalArgs {
     /// product's simulated execution time against its lower bound).
     #[arg(long, value_name = "DIR")]
     pub plots: Option<PathBuf>,
+    /// Also record every scenario's runs for the Rerun viewer: one file
+    /// per scenario, named as the scenario (`case1_3of5/007` is
+    /// DIR/case1_3of5/007.rrd; directories created if needed, files of
+    /// the same names replaced, each written atomically), one recording
+    /// per planner in each file; see `execute --record`. Needs a build
+    /// with `--features rerun`.
+    #[arg(long, value_name = "DIR", conflicts_with = "reasoner_only")]
+    pub record: Option<PathBuf>,
     /// Print every figure as JSON instead of the table.
     #[arg(long)]
     pub json: bool,

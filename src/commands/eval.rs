@@ -7,14 +7,19 @@ use crate::fsio::{FsLoader, write_file_atomically};
 use anyhow::Context;
 use anyhow::bail;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use packwright_compiler::Compiled;
+use packwright_compiler::expand::Setup;
 use packwright_interface::PlannerKind;
-use packwright_pipeline::episode::cell_of;
-use packwright_pipeline::evaluate::{CaseResult, Row, markdown, run_case};
+use packwright_motion::execute::{self, Planner};
+use packwright_nets::Networks;
+use packwright_pipeline::episode::{cell_of, episode};
+use packwright_pipeline::evaluate::{CaseResult, Row, Run, markdown, run_case};
 use packwright_pipeline::models::{choose_planner, taught};
 use packwright_pipeline::reach::RobotWorkspace;
+use packwright_recording::{Journal, JournalPolicy, JournalWorld};
 use rayon::prelude::*;
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A suite evaluated without the learned planner, and why.
 #[derive(Debug, Serialize)]
@@ -42,6 +47,7 @@ struct EvalReport<'a> {
 }
 
 pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
+    super::execute::can_record(args.record.as_deref())?;
     let compiled = match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new())
     {
         Ok(c) => c,
@@ -124,20 +130,33 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
             .map_init(
                 || nets.clone(),
                 |nets, (i, case)| {
-                    let r = run_case(
-                        &case.name,
-                        &compiled,
-                        &case.setup,
-                        nets.as_ref(),
-                        &planners,
-                        args.seed.wrapping_add(i as u64),
-                        args.reasoner_only,
-                    );
+                    let seed = args.seed.wrapping_add(i as u64);
+                    let r = match &args.record {
+                        Some(dir) => recorded_case(
+                            &recording_path(dir, &case.name),
+                            &case.name,
+                            &compiled,
+                            &case.setup,
+                            nets.as_ref(),
+                            &planners,
+                            seed,
+                        ),
+                        None => run_case(
+                            &case.name,
+                            &compiled,
+                            &case.setup,
+                            nets.as_ref(),
+                            &planners,
+                            seed,
+                            args.reasoner_only,
+                        )
+                        .map_err(anyhow::Error::from),
+                    };
                     bar.inc(1);
                     r
                 },
             )
-            .collect::<packwright_pipeline::Result<_>>()?;
+            .collect::<anyhow::Result<_>>()?;
         bar.finish_and_clear();
         if args.reasoner_only {
             planners.retain(|p| *p == PlannerKind::Learned);
@@ -147,6 +166,13 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
             rows.push(Row::of(&suite.name, &cell, taught, p, &results));
         }
         all_results.extend(results);
+    }
+    if let Some(dir) = &args.record {
+        errln!(
+            "wrote {} .rrd files (one per scenario) under {}",
+            all_results.len(),
+            dir.display()
+        );
     }
     let table = markdown(&rows);
     if let Some(dir) = &args.plots {
@@ -175,6 +201,83 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
         out!("{table}");
     }
     Ok(Exit::Success)
+}
+
+/// Where `--record DIR` writes scenario `case` (`SUITE/NNN`):
+/// DIR/SUITE/NNN.rrd. Names are the compiler's identifiers; any other
+/// character is replaced, so that a name never leaves DIR.
+fn recording_path(dir: &Path, case: &str) -> PathBuf {
+    let mut path = dir.to_path_buf();
+    for part in case.split('/') {
+        let safe: String = part
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        path.push(safe);
+    }
+    path.set_extension("rrd");
+    path
+}
+
+/// `--record`: scenario `name` as [`run_case`] runs it (the reasoner's
+/// trial there, then each planner from the start pose), every run
+/// journalled, and the file `path` written with one recording per
+/// planner.
+fn recorded_case(
+    path: &Path,
+    name: &str,
+    compiled: &Compiled,
+    setup: &Setup,
+    nets: Option<&Networks>,
+    planners: &[PlannerKind],
+    seed: u64,
+) -> anyhow::Result<CaseResult> {
+    let mut result = run_case(name, compiled, setup, nets, &[], seed, false)?;
+    let ep = episode(&compiled.model, setup)?;
+    let start = ep.home()?;
+    let mut journalled = Vec::new();
+    for &kind in planners {
+        let journal = Journal::new();
+        let policy = nets.map(|n| JournalPolicy::new(n, &journal, &ep.task));
+        let planner = match (kind, &policy) {
+            (PlannerKind::Learned, Some(policy)) => Planner::Learned { policy, seed },
+            (PlannerKind::Learned, None) => continue,
+            (PlannerKind::Rrt, _) => Planner::Rrt { seed },
+            (PlannerKind::Expert, _) => Planner::Expert,
+        };
+        let mut sim = ep.simulator(start)?;
+        let mut world = JournalWorld::new(&mut sim, &journal);
+        let report = execute::run(&mut world, &ep.arm, &ep.task, &planner);
+        result.runs.push((kind, Run::of(&report)));
+        journalled.push((format!("{name} ({kind})"), journal.take(), report));
+    }
+    let score = |g: &packwright_interface::Graph| {
+        nets.map(|n| super::execute::scores(n, g))
+            .unwrap_or_default()
+    };
+    let runs: Vec<packwright_recording::Run> = journalled
+        .iter()
+        .map(|(title, entries, report)| packwright_recording::Run {
+            name: title,
+            arm: &ep.arm,
+            task: &ep.task,
+            entries,
+            report,
+            scorer: (report.planner == PlannerKind::Learned)
+                .then_some(&score as packwright_recording::Scorer),
+        })
+        .collect();
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    super::execute::write_recording(path, &runs)?;
+    Ok(result)
 }
 
 /// `--plots DIR`: the charts of this run (`packwright_draw::charts`),

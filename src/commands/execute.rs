@@ -7,12 +7,17 @@ use crate::commands::draw::{Recorder, write_executed_svg};
 use crate::fsio::FsLoader;
 use packwright_interface::outcome::{Outcome, PlannerKind, Report};
 use packwright_interface::world::World;
+use packwright_interface::{Graph, Joints, Policy};
 use packwright_motion::execute::{self, Planner};
+use packwright_nets::Networks;
+use packwright_nets::features::{node_rows, slot_rows};
 use packwright_pipeline::episode::{Episode, episode, find_setup};
 use packwright_pipeline::models::{choose_planner, taught};
 use packwright_pipeline::reach::RobotWorkspace;
 use packwright_pipeline::robot::{self, Products};
+use packwright_recording::{Journal, JournalPolicy, JournalWorld, Run, Scores};
 use packwright_ur::RobotAddress;
+use std::path::Path;
 
 /// The report as JSON, with the task's name.
 pub fn to_json(name: &str, r: &Report) -> serde_json::Value {
@@ -23,7 +28,43 @@ pub fn to_json(name: &str, r: &Report) -> serde_json::Value {
     value
 }
 
+/// Why `--record` is refused in a build without Rerun, and how to get it.
+const NO_RERUN: &str = "--record needs Rerun, which this build leaves out: rebuild with \
+`--features rerun` (cargo build --release --features rerun, or cargo install --path . \
+--features rerun)";
+
+/// `--record` in a build without Rerun: refused (exit 2) before anything
+/// runs.
+pub fn can_record(record: Option<&Path>) -> anyhow::Result<()> {
+    if record.is_some() && !packwright_recording::ENABLED {
+        anyhow::bail!(NO_RERUN);
+    }
+    Ok(())
+}
+
+/// Writes `runs` as one .rrd file (atomically), one recording each.
+#[cfg(feature = "rerun")]
+pub fn write_recording(path: &Path, runs: &[Run]) -> anyhow::Result<()> {
+    let bytes = packwright_recording::rrd(runs)?;
+    crate::fsio::write_file_atomically(path, &bytes)
+}
+
+#[cfg(not(feature = "rerun"))]
+pub fn write_recording(_path: &Path, _runs: &[Run]) -> anyhow::Result<()> {
+    anyhow::bail!(NO_RERUN)
+}
+
+/// The reasoner's own scores of a graph, as recordings show them.
+pub fn scores(nets: &Networks, graph: &Graph) -> Scores {
+    let r = &nets.weights().reasoner;
+    Scores {
+        nodes: r.scores(&node_rows(graph)),
+        slots: r.slot_scores(&slot_rows(graph)),
+    }
+}
+
 pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
+    can_record(args.record.as_deref())?;
     let compiled = match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new())
     {
         Ok(c) => c,
@@ -50,9 +91,20 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
             ep.task.cell.name
         );
     }
-    let planner = match (&model, kind) {
-        (Some(nets), _) => Planner::Learned {
-            policy: nets,
+    // With --record, the policy's decisions are journalled too.
+    let journal = Journal::new();
+    let journalled = match (&model, &args.record) {
+        (Some(nets), Some(_)) => Some(JournalPolicy::new(nets, &journal, &ep.task)),
+        _ => None,
+    };
+    let policy: Option<&dyn Policy> = match (&journalled, &model) {
+        (Some(p), _) => Some(p),
+        (None, Some(nets)) => Some(nets),
+        (None, None) => None,
+    };
+    let planner = match (policy, kind) {
+        (Some(policy), _) => Planner::Learned {
+            policy,
             seed: args.seed,
         },
         (None, PlannerKind::Rrt) => Planner::Rrt { seed: args.seed },
@@ -62,24 +114,62 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
         if args.svg.is_some() {
             anyhow::bail!("--svg draws simulated runs only (no --robot)");
         }
+        if args.record.is_some() {
+            anyhow::bail!("--record records simulated runs only (no --robot)");
+        }
         return on_robot(args, &address, &name, &ep, &planner);
     }
     let mut sim = ep.simulator(ep.home()?)?;
-    let mut recorder = Recorder::new(&mut sim);
-    let report = execute::run(&mut recorder, &ep.arm, &ep.task, &planner);
+    let (report, cycles) = if args.record.is_some() {
+        simulate(&mut JournalWorld::new(&mut sim, &journal), &ep, &planner)
+    } else {
+        simulate(&mut sim, &ep, &planner)
+    };
     if let Some(path) = &args.svg {
-        let cycles = &recorder.cycles;
         write_executed_svg(
             path,
             &compiled.model,
             &name,
             &setup,
             &ep.arm,
-            cycles,
+            &cycles,
             &report,
         )?;
     }
+    if let Some(path) = &args.record {
+        let entries = journal.take();
+        let title = format!("{name} ({})", report.planner);
+        let score = |g: &Graph| {
+            model
+                .as_ref()
+                .map(|nets| scores(nets, g))
+                .unwrap_or_default()
+        };
+        let run = Run {
+            name: &title,
+            arm: &ep.arm,
+            task: &ep.task,
+            entries: &entries,
+            report: &report,
+            scorer: model
+                .as_ref()
+                .map(|_| &score as packwright_recording::Scorer),
+        };
+        write_recording(path, &[run])?;
+        errln!("wrote {}", path.display());
+    }
     print_outcome(args, &name, &report, "simulated")
+}
+
+/// Packs in `world`, recording what `--svg` draws.
+fn simulate<W: World>(
+    world: &mut W,
+    ep: &Episode,
+    planner: &Planner,
+) -> (Report, Vec<(Joints, bool, f64)>) {
+    let mut recorder = Recorder::new(world);
+    let report = execute::run(&mut recorder, &ep.arm, &ep.task, planner);
+    (report, recorder.cycles)
 }
 
 /// Prints the report and picks the exit code.
