@@ -297,7 +297,13 @@ pub fn blend(
     waypoints: &[Joints],
     stops: &[bool],
 ) -> Result<Blended, SmoothingError> {
-    let caps: Vec<f64> = (0..waypoints.len())
+    blend_capped(limits, start, waypoints, &full_caps(waypoints.len(), stops))
+}
+
+/// The caps of `n` corners with `stops` (a missing entry is not a stop):
+/// 0 at a stop, the whole room (1) elsewhere.
+pub fn full_caps(n: usize, stops: &[bool]) -> Vec<f64> {
+    (0..n)
         .map(|k| {
             if stops.get(k).copied().unwrap_or(false) {
                 0.0
@@ -305,8 +311,7 @@ pub fn blend(
                 1.0
             }
         })
-        .collect();
-    blend_capped(limits, start, waypoints, &caps)
+        .collect()
 }
 
 /// [`blend`] with a cap per corner: `caps[k]` (in `[0, 1]`, a missing

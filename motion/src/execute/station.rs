@@ -820,15 +820,7 @@ pub fn checked_blend_by<'h>(
     stops: &[bool],
     load_of: impl Fn(usize) -> Load<'h>,
 ) -> Result<Blended, Unchecked> {
-    let mut caps: Vec<f64> = (0..waypoints.len())
-        .map(|k| {
-            if stops.get(k).copied().unwrap_or(false) {
-                0.0
-            } else {
-                1.0
-            }
-        })
-        .collect();
+    let mut caps = crate::blend::full_caps(waypoints.len(), stops);
     // Each round halves one corner's cap, and a cap at MIN_CAP or below
     // makes it a stop: at most four rounds per waypoint.
     // The start is where the arm is: checked once, with the first leg's
