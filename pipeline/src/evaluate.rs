@@ -6,8 +6,8 @@ use crate::error::Result;
 use crate::stats::{Interval, mean, quantile, wilson};
 use packwright_compiler::Compiled;
 use packwright_compiler::expand::Setup;
-use packwright_interface::World;
 use packwright_interface::outcome::{FallbackKind, Outcome, PlannerKind, Report, Timing};
+use packwright_interface::{Policy, World};
 use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
 use serde::Serialize;
@@ -88,11 +88,8 @@ pub fn run_case(
         return Ok(result);
     }
     for &kind in planners {
-        let planner = match (kind, nets) {
-            (PlannerKind::Learned, Some(nets)) => Planner::Learned { policy: nets, seed },
-            (PlannerKind::Learned, None) => continue,
-            (PlannerKind::Rrt, _) => Planner::Rrt { seed },
-            (PlannerKind::Expert, _) => Planner::Expert,
+        let Some(planner) = Planner::of(kind, nets.map(|n| n as &dyn Policy), seed) else {
+            continue;
         };
         let mut sim = ep.simulator(start)?;
         let report = execute::run(&mut sim, &ep.arm, &ep.task, &planner);

@@ -9,7 +9,7 @@ use anyhow::bail;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use packwright_compiler::Compiled;
 use packwright_compiler::expand::Setup;
-use packwright_interface::PlannerKind;
+use packwright_interface::{PlannerKind, Policy};
 use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
 use packwright_pipeline::episode::{cell_of, episode};
@@ -245,11 +245,9 @@ fn recorded_case(
     for &kind in planners {
         let journal = Journal::new();
         let policy = nets.map(|n| JournalPolicy::new(n, &journal, &ep.task));
-        let planner = match (kind, &policy) {
-            (PlannerKind::Learned, Some(policy)) => Planner::Learned { policy, seed },
-            (PlannerKind::Learned, None) => continue,
-            (PlannerKind::Rrt, _) => Planner::Rrt { seed },
-            (PlannerKind::Expert, _) => Planner::Expert,
+        let Some(planner) = Planner::of(kind, policy.as_ref().map(|p| p as &dyn Policy), seed)
+        else {
+            continue;
         };
         let mut sim = ep.simulator(start)?;
         let mut world = JournalWorld::new(&mut sim, &journal);

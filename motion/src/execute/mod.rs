@@ -50,7 +50,20 @@ pub enum Planner<'a> {
     Learned { policy: &'a dyn Policy, seed: u64 },
 }
 
-impl Planner<'_> {
+impl<'a> Planner<'a> {
+    /// The planner of `kind`, seeded; the learned one needs `policy`
+    /// (`None` without it).
+    pub fn of(kind: PlannerKind, policy: Option<&'a dyn Policy>, seed: u64) -> Option<Planner<'a>> {
+        Some(match kind {
+            PlannerKind::Learned => Planner::Learned {
+                policy: policy?,
+                seed,
+            },
+            PlannerKind::Rrt => Planner::Rrt { seed },
+            PlannerKind::Expert => Planner::Expert,
+        })
+    }
+
     pub fn kind(&self) -> PlannerKind {
         match self {
             Planner::Expert => PlannerKind::Expert,
