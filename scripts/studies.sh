@@ -12,6 +12,10 @@
 #   WORK        where the files go (default: a new directory under /tmp)
 #   LIMIT       scenarios per suite (default: 100, all of them)
 #   TRAIN_ARGS  extra arguments for `packwright train`
+#   PLOTS       also chart the study into this directory (`packwright
+#               chart`): success_vs_x.svg (reasoner success against the
+#               training ratio, per suite) and success_vs_n.svg (against
+#               the products in the order, per training ratio)
 
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -32,6 +36,7 @@ suites=(m_case1_3of5 m_case1_4of5 m_case2_3of5 m_case2_4of5 m_short_3of5)
 "$bin" compile orders/studies/generalisation.pack -o "$work/taught" >&2
 printf '| training ratio | demos | suite | reasoner SR | SR [95%% CI] | SR no fallback |\n'
 printf '|---|---|---|---|---|---|\n'
+runs=()
 for ratio in keep25:0.25 keep50:0.5 keep75:0.75 all:1; do
   name=study_2of5_${ratio%%:*}
   model=$work/$name.model
@@ -45,6 +50,7 @@ for ratio in keep25:0.25 keep50:0.5 keep75:0.75 all:1; do
   fi
   "$bin" eval orders/suites/measure.pack --model "$model" --suite "${suites[@]}" \
     --limit "${LIMIT:-100}" --quiet --json >"$work/$name.eval.json"
+  runs+=("${ratio#*:}=$work/$name.eval.json")
   demos=$(jq -r '.demonstrations' "$model/metrics.json")
   jq -r --arg ratio "${ratio#*:}" --arg demos "$demos" '
     def f2: (. * 100 | round) as $x
@@ -52,4 +58,7 @@ for ratio in keep25:0.25 keep50:0.5 keep75:0.75 all:1; do
     .rows[] | "| \($ratio) | \($demos) | \(.suite) (\(.scenarios)) | \(.reasoner_sr.rate | f2) | \(.sr.rate | f2) [\(.sr.ci95[0] | f2), \(.sr.ci95[1] | f2)] | \(.sr_no_fallback.rate | f2) |"
   ' "$work/$name.eval.json"
 done
+if [ -n "${PLOTS:-}" ]; then
+  "$bin" chart "${runs[@]}" --x "training ratio" -o "$PLOTS" >&2
+fi
 echo "files in $work" >&2

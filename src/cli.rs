@@ -128,6 +128,21 @@ pub enum Command {
     /// (scripts/family.sh compiles, trains and evaluates a list of seeds).
     /// Files are written atomically; their paths are printed on stdout.
     Generate(GenerateArgs),
+    /// Chart a study: success against a quantity varied across several
+    /// `eval --json` runs (a training ratio, say), and against n.
+    ///
+    /// Each run is given as VALUE=FILE: an `eval --json` report and the
+    /// value of the studied quantity it was run at. Writes two SVG files
+    /// into DIR: success_vs_x.svg (one line per suite, the success rate
+    /// with its Wilson 95% interval at each VALUE) and success_vs_n.svg
+    /// (one line per VALUE, suites with the same number of products per
+    /// order pooled). scripts/studies.sh trains and evaluates the paper's
+    /// generalisation studies and calls this. Exit 0 when both are
+    /// written, 2 on a missing or malformed report.
+    ///
+    /// Example: `packwright chart 0.25=keep25.json 0.5=keep50.json
+    /// 1=all.json --x "training ratio" -o docs/studies`.
+    Chart(ChartArgs),
 }
 
 #[derive(Debug, Args)]
@@ -364,6 +379,56 @@ pub struct EvalArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+/// Which success rate a study charts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum StudyMetric {
+    /// The reasoner's: every decision of a scenario right.
+    Reasoner,
+    /// The whole system's: the package complete (fallbacks allowed).
+    System,
+    /// The whole system's without any fallback to the expert.
+    NoFallback,
+}
+
+fn study_run(s: &str) -> Result<(f64, PathBuf), String> {
+    let (value, file) = s
+        .split_once('=')
+        .ok_or_else(|| format!("`{s}` is not VALUE=FILE (for example 0.25=run.json)"))?;
+    let x: f64 = value
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{value}` in `{s}` is not a number"))?;
+    if !x.is_finite() {
+        return Err(format!("`{value}` in `{s}` is not a finite number"));
+    }
+    if file.is_empty() {
+        return Err(format!("`{s}` names no file after `=`"));
+    }
+    Ok((x, PathBuf::from(file)))
+}
+
+#[derive(Debug, Args)]
+pub struct ChartArgs {
+    /// The runs of the study, each as VALUE=FILE: the value of the studied
+    /// quantity and the `packwright eval --json` report run at it.
+    #[arg(required = true, value_name = "VALUE=FILE", value_parser = study_run)]
+    pub runs: Vec<(f64, PathBuf)>,
+    /// What VALUE is: the x axis of success_vs_x.svg and the legend of
+    /// success_vs_n.svg.
+    #[arg(long, value_name = "NAME", default_value = "training ratio")]
+    pub x: String,
+    /// The success rate charted.
+    #[arg(long, value_enum, default_value_t = StudyMetric::Reasoner)]
+    pub metric: StudyMetric,
+    /// The planner whose rows are charted (learned, rrt or expert).
+    #[arg(long, value_name = "PLANNER", value_parser = planner, default_value = "learned")]
+    pub planner: PlannerKind,
+    /// The directory for the two SVG files (created if needed; files of
+    /// the same names replaced, each written atomically).
+    #[arg(short, long, value_name = "DIR")]
+    pub output: PathBuf,
 }
 
 #[derive(Debug, Args)]

@@ -59,5 +59,6 @@ pub fn run(cli: cli::Cli) -> anyhow::Result<Exit> {
         cli::Command::Eval(args) => commands::eval::run(&args),
         cli::Command::Fmt(args) => commands::fmt::run(&args),
         cli::Command::Generate(args) => commands::generate::run(&args),
+        cli::Command::Chart(args) => commands::chart::run(&args),
     }
 }

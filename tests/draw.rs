@@ -213,6 +213,78 @@ fn eval_writes_its_charts() {
     assert!(rates.contains("m_case1_2of3"));
 }
 
+/// `chart` reads `eval --json` reports back: two runs of the reasoner on
+/// two suites give one line per suite against the run's value, and one
+/// per value against n; a file that is no report, or a value that is no
+/// number, is refused with exit 2 and writes nothing.
+#[test]
+fn chart_draws_a_study_from_eval_reports() {
+    let dir = scratch("draw", "study");
+    let report = dir.join("run.json");
+    let o = packwright(&[
+        "eval",
+        "orders/suites/measure.pack",
+        "--suite",
+        "m_case1_2of3",
+        "m_case1_3of5",
+        "--limit",
+        "3",
+        "--reasoner-only",
+        "--quiet",
+        "--json",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    fs::write(&report, &o.stdout).expect("report written");
+    let out = dir.join("charts");
+    let run = |value: &str| format!("{value}={}", report.display());
+    let o = packwright(&[
+        "chart",
+        &run("0.5"),
+        &run("1"),
+        "--x",
+        "training ratio",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 2);
+    let chart = |svg: &str| svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>");
+    let vs_x = fs::read_to_string(out.join("success_vs_x.svg")).expect("vs x");
+    assert!(chart(&vs_x));
+    for name in ["m_case1_2of3", "m_case1_3of5", "training ratio"] {
+        assert!(vs_x.contains(name), "{name}");
+    }
+    assert_eq!(vs_x.matches("<circle").count(), 4, "2 suites x 2 runs");
+    let vs_n = fs::read_to_string(out.join("success_vs_n.svg")).expect("vs n");
+    assert!(chart(&vs_n));
+    assert!(vs_n.contains("training ratio 0.5") && vs_n.contains("training ratio 1"));
+    assert_eq!(vs_n.matches("<circle").count(), 4, "n = 2, 3 for each run");
+
+    let not_a_report = dir.join("not.json");
+    fs::write(&not_a_report, "{\"rows\": 3}").expect("written");
+    let refused = dir.join("refused");
+    for bad in [
+        format!("0.5={}", not_a_report.display()),
+        format!("half={}", report.display()),
+        format!("0.5={}", dir.join("missing.json").display()),
+    ] {
+        let o = packwright(&["chart", &bad, "-o", refused.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{bad}");
+        assert!(!o.stderr.is_empty(), "{bad}: says why");
+        assert!(!refused.exists(), "{bad}: nothing written");
+    }
+}
+
 /// What `execute --svg` draws: the expert packing deli_crate, recorded
 /// through the `World`, has every stage and its rests.
 #[test]

@@ -381,3 +381,108 @@ pub fn execution_times(sets: &[ProductTimes]) -> Result<String, DrawError> {
     }
     Ok(out)
 }
+
+/// One point of a study: a series' success rate with its Wilson 95%
+/// interval at one value of the studied quantity (a training ratio, the
+/// number of products in the order).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyPoint {
+    /// The line the point belongs to (a suite, a training ratio).
+    pub series: String,
+    pub x: f64,
+    pub rate: f64,
+    pub low: f64,
+    pub high: f64,
+    /// Scenarios behind the rate.
+    pub n: usize,
+}
+
+/// Success (y, with its interval as a bar) against a studied quantity (x):
+/// one line per series, points in order of x; `title` is the caption and
+/// `x_desc` names the x axis.
+pub fn study(points: &[StudyPoint], title: &str, x_desc: &str) -> Result<String, DrawError> {
+    const NAME: &str = "study";
+    finite(
+        NAME,
+        points.iter().flat_map(|p| [p.x, p.rate, p.low, p.high]),
+    )?;
+    let err = fail(NAME);
+    let series = planners(points.iter().map(|p| p.series.as_str()));
+    let (lo, hi) = points
+        .iter()
+        .map(|p| p.x)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+    let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 1.0) };
+    let pad = ((hi - lo) * 0.08).max(0.05 * hi.abs().max(1.0));
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, (720, 460)).into_drawing_area();
+        root.fill(&WHITE).map_err(&err)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(14)
+            .x_label_area_size(44)
+            .y_label_area_size(56)
+            .build_cartesian_2d((lo - pad)..(hi + pad), 0f64..1.05)
+            .map_err(&err)?;
+        // Whole numbers (n, products) are labelled as such, nothing between.
+        let whole = points.iter().all(|p| p.x.fract() == 0.0);
+        let ticks = if whole {
+            ((hi - lo) as usize + 1).clamp(2, 20)
+        } else {
+            10
+        };
+        let x_label = move |v: &f64| {
+            if !whole {
+                format!("{v}")
+            } else if (v - v.round()).abs() < 1e-6 {
+                format!("{:.0}", v.round())
+            } else {
+                String::new()
+            }
+        };
+        chart
+            .configure_mesh()
+            .x_labels(ticks)
+            .x_label_formatter(&x_label)
+            .x_desc(x_desc)
+            .y_desc("success rate (Wilson 95% interval)")
+            .label_style(("sans-serif", 12))
+            .draw()
+            .map_err(&err)?;
+        for (i, name) in series.iter().enumerate() {
+            let c = PALETTE[i % PALETTE.len()];
+            let mut line: Vec<&StudyPoint> = points.iter().filter(|p| p.series == *name).collect();
+            line.sort_by(|a, b| a.x.total_cmp(&b.x));
+            let nudge = (i as f64 - (series.len() as f64 - 1.0) / 2.0) * pad * 0.08;
+            chart
+                .draw_series(LineSeries::new(
+                    line.iter().map(|p| (p.x + nudge, p.rate)),
+                    c.stroke_width(2),
+                ))
+                .map_err(&err)?
+                .label(name.to_string())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2))
+                });
+            // The bar's own marker is the point.
+            chart
+                .draw_series(line.iter().map(|p| {
+                    ErrorBar::new_vertical(p.x + nudge, p.low, p.rate, p.high, c.stroke_width(2), 8)
+                }))
+                .map_err(&err)?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::LowerLeft)
+            .label_font(("sans-serif", 13))
+            .draw()
+            .map_err(&err)?;
+        root.present().map_err(&err)?;
+    }
+    Ok(out)
+}

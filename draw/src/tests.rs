@@ -4,7 +4,8 @@
 use crate::DrawError;
 use crate::cell::{Mark, Picture, Place, Product, ProductState, UR10_REACH, picture};
 use crate::charts::{
-    Latencies, ProductTimes, SuccessRate, execution_times, latencies, success_rates,
+    Latencies, ProductTimes, StudyPoint, SuccessRate, execution_times, latencies, study,
+    success_rates,
 };
 use crate::path::{EventKind, Sample, ToolPath};
 use packwright_interface::scene::{BoxSpec, CellScene, SlotSpec};
@@ -306,6 +307,42 @@ fn charts_refuse_non_finite_numbers() {
     r[0].high = f64::INFINITY;
     assert!(matches!(
         success_rates(&r),
+        Err(DrawError::NonFinite { .. })
+    ));
+}
+
+#[test]
+fn a_study_has_one_line_per_series_and_a_bar_per_point() {
+    let p = |series: &str, x: f64, rate: f64| StudyPoint {
+        series: series.into(),
+        x,
+        rate,
+        low: (rate - 0.1).max(0.0),
+        high: (rate + 0.05).min(1.0),
+        n: 100,
+    };
+    let points = vec![
+        p("m_case1_3of5", 0.5, 0.9),
+        p("m_case1_3of5", 0.25, 0.7),
+        p("m_case1_3of5", 1.0, 1.0),
+        p("m_case2_4of5", 0.25, 0.5),
+        p("m_case2_4of5", 1.0, 0.8),
+    ];
+    let svg = study(&points, "Success against training ratio", "training ratio").expect("draws");
+    let t = texts(&svg);
+    for name in ["m_case1_3of5", "m_case2_4of5", "training ratio"] {
+        assert!(t.iter().any(|s| s == name), "{name} missing in {t:?}");
+    }
+    assert_eq!(svg.matches("<circle").count(), points.len());
+    assert!(svg.matches("<polyline").count() >= 2);
+    assert_eq!(
+        svg,
+        study(&points, "Success against training ratio", "training ratio").expect("draws")
+    );
+    let mut bad = points.clone();
+    bad[1].x = f64::NAN;
+    assert!(matches!(
+        study(&bad, "t", "x"),
         Err(DrawError::NonFinite { .. })
     ));
 }

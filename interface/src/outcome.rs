@@ -4,7 +4,7 @@
 //! looks inside a message to decide anything.
 
 use crate::world::{Body, Contact, WorldError};
-use serde::{Serialize, Serializer};
+use serde::{Deserialize, Serialize, Serializer};
 use std::fmt;
 
 /// A product is packed when its centre is this close to its slot goal (m).
@@ -29,7 +29,7 @@ impl fmt::Display for Stage {
 
 /// Which planner packs: the scripted expert, the expert's sub-goals joined
 /// by RRT-Connect (the paper's baseline), or the learned networks.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PlannerKind {
     Expert,

@@ -150,6 +150,9 @@ pub struct Row {
     pub cell_taught: Option<bool>,
     pub planner: PlannerKind,
     pub scenarios: usize,
+    /// The products each scenario's order selects (n of `choose n of`),
+    /// when every scenario of the suite selects as many.
+    pub products: Option<usize>,
     /// Learned only: every reasoner decision of a scenario right.
     pub reasoner_sr: Option<Rate>,
     pub reasoner_scenarios: usize,
@@ -177,12 +180,14 @@ pub struct Row {
 
 impl Row {
     /// The row of `planner` over the results of one suite in `cell`;
-    /// `cell_taught` for the learned planner.
+    /// `cell_taught` for the learned planner; `products` the order size
+    /// its scenarios share, if they do.
     pub fn of(
         suite: &str,
         cell: &str,
         cell_taught: Option<bool>,
         planner: PlannerKind,
+        products: Option<usize>,
         cases: &[CaseResult],
     ) -> Row {
         let runs: Vec<(&str, &Run)> = cases
@@ -231,6 +236,7 @@ impl Row {
             cell_taught: cell_taught.filter(|_| learned),
             planner,
             scenarios: n.max(reasoner.len()),
+            products,
             reasoner_sr: Rate::of(reasoner.iter().filter(|r| **r).count(), reasoner.len()),
             reasoner_scenarios: reasoner.len(),
             sr: Rate::of(ok, n),

@@ -28,6 +28,9 @@ struct Skipped {
     reason: String,
 }
 
+/// The schema of `eval --json`, which `chart` reads back.
+pub const SCHEMA: &str = "packwright.eval/2";
+
 /// The machine the figures were measured on.
 #[derive(Debug, Serialize)]
 struct Machine {
@@ -36,7 +39,7 @@ struct Machine {
     arch: &'static str,
 }
 
-/// `eval --json` (schema `packwright.eval/1`).
+/// `eval --json` (schema [`SCHEMA`]).
 #[derive(Debug, Serialize)]
 struct EvalReport<'a> {
     schema: &'static str,
@@ -161,9 +164,14 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
         if args.reasoner_only {
             planners.retain(|p| *p == PlannerKind::Learned);
         }
+        let products = suite
+            .cases
+            .first()
+            .map(|c| c.setup.assignment.len())
+            .filter(|n| suite.cases.iter().all(|c| c.setup.assignment.len() == *n));
         for &p in &planners {
             let taught = nets.as_ref().map(|n| taught(n, &cell));
-            rows.push(Row::of(&suite.name, &cell, taught, p, &results));
+            rows.push(Row::of(&suite.name, &cell, taught, p, products, &results));
         }
         all_results.extend(results);
     }
@@ -190,7 +198,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
     };
     if args.json {
         let report = EvalReport {
-            schema: "packwright.eval/2",
+            schema: SCHEMA,
             seed: args.seed,
             machine,
             rows: &rows,
