@@ -12,12 +12,28 @@ use packwright_pipeline::episode::{episode, find_setup};
 use packwright_pipeline::reach::RobotWorkspace;
 use std::fs;
 use std::path::PathBuf;
+use std::process::Output;
 
 /// Elements whose `class` attribute starts with `class` followed by a
 /// space or the closing quote.
 fn count(svg: &str, class: &str) -> usize {
     svg.matches(&format!("class=\"{class}\"")).count()
         + svg.matches(&format!("class=\"{class} ")).count()
+}
+
+/// The run exited 0 (else its stderr is shown).
+fn succeeded(o: &Output) {
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// A plotters chart: one SVG document.
+fn is_chart(svg: &str) -> bool {
+    svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>")
 }
 
 fn is_svg(svg: &str) {
@@ -65,12 +81,7 @@ fn an_order_has_its_products_slots_and_arrows() {
         "--order",
         "deli_crate",
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    succeeded(&o);
     let svg = String::from_utf8(o.stdout).expect("UTF-8");
     is_svg(&svg);
     assert_eq!(count(&svg, "product"), 5);
@@ -90,12 +101,7 @@ fn a_scenario_marks_worker_packed_and_missing_products() {
         "--scenario",
         "deli_mixed",
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    succeeded(&o);
     let svg = String::from_utf8(o.stdout).expect("UTF-8");
     assert_eq!(count(&svg, "product waiting"), 3);
     assert_eq!(count(&svg, "product worker-packed"), 1);
@@ -195,18 +201,10 @@ fn eval_writes_its_charts() {
         "--plots",
         plots.to_str().unwrap(),
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    succeeded(&o);
     for name in ["success_rate.svg", "latency.svg", "execution_time.svg"] {
         let svg = fs::read_to_string(plots.join(name)).expect(name);
-        assert!(
-            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
-            "{name}"
-        );
+        assert!(is_chart(&svg), "{name}");
         assert!(svg.contains("learned"), "{name} names the planner");
     }
     let rates = fs::read_to_string(plots.join("success_rate.svg")).expect("rates");
@@ -233,12 +231,7 @@ fn chart_draws_a_study_from_eval_reports() {
         "--quiet",
         "--json",
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    succeeded(&o);
     fs::write(&report, &o.stdout).expect("report written");
     let out = dir.join("charts");
     let run = |value: &str| format!("{value}={}", report.display());
@@ -251,22 +244,16 @@ fn chart_draws_a_study_from_eval_reports() {
         "-o",
         out.to_str().unwrap(),
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    succeeded(&o);
     assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 2);
-    let chart = |svg: &str| svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>");
     let vs_x = fs::read_to_string(out.join("success_vs_x.svg")).expect("vs x");
-    assert!(chart(&vs_x));
+    assert!(is_chart(&vs_x));
     for name in ["m_case1_2of3", "m_case1_3of5", "training ratio"] {
         assert!(vs_x.contains(name), "{name}");
     }
     assert_eq!(vs_x.matches("<circle").count(), 4, "2 suites x 2 runs");
     let vs_n = fs::read_to_string(out.join("success_vs_n.svg")).expect("vs n");
-    assert!(chart(&vs_n));
+    assert!(is_chart(&vs_n));
     assert!(vs_n.contains("training ratio 0.5") && vs_n.contains("training ratio 1"));
     assert_eq!(vs_n.matches("<circle").count(), 4, "n = 2, 3 for each run");
 
@@ -383,12 +370,7 @@ fn execute_draws_its_path() {
         "--svg",
         out.to_str().unwrap(),
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    succeeded(&o);
     assert!(String::from_utf8_lossy(&o.stdout).contains("package complete"));
     let svg = fs::read_to_string(&out).expect("written");
     is_svg(&svg);
