@@ -5,11 +5,12 @@
 mod common;
 
 use common::{packwright, scratch};
-use packwright::commands::draw::{Recorder, executed_picture};
+use packwright::commands::draw::executed_picture;
 use packwright::fsio::FsLoader;
 use packwright_motion::execute::{self, Planner};
 use packwright_pipeline::episode::{episode, find_setup};
 use packwright_pipeline::reach::RobotWorkspace;
+use packwright_recording::{Journal, JournalWorld};
 use std::fs;
 use std::path::PathBuf;
 use std::process::Output;
@@ -285,10 +286,15 @@ fn the_executed_path_is_recorded_and_drawn() {
     let mut sim = ep
         .simulator(ep.home().expect("home"))
         .expect("a simulation");
-    let mut rec = Recorder::new(&mut sim);
-    let report = execute::run(&mut rec, &ep.arm, &ep.task, &Planner::Expert);
+    let journal = Journal::new();
+    let report = execute::run(
+        &mut JournalWorld::new(&mut sim, &journal),
+        &ep.arm,
+        &ep.task,
+        &Planner::Expert,
+    );
     assert!(report.complete);
-    let cycles = rec.cycles;
+    let cycles = journal.take().cycles;
     assert!(cycles.len() > 1000, "{}", cycles.len());
     let picture = executed_picture(&compiled.model, &name, &setup, &ep.arm, &cycles, &report);
     let path = picture.path.as_ref().expect("a path");

@@ -164,7 +164,14 @@ impl Journal {
             }
         });
         if let Some(q) = s.commanded {
-            let previous = s.entries.cycles.last().map_or(q, |c| c.commanded);
+            // The first cycle's change is from the joints at the start.
+            let previous = s
+                .entries
+                .cycles
+                .last()
+                .map(|c| c.commanded)
+                .or(s.entries.frames.first().map(|f| f.joints))
+                .unwrap_or(q);
             let speed = q
                 .iter()
                 .zip(&previous)

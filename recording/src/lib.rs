@@ -30,7 +30,7 @@ mod error;
 #[cfg(feature = "rerun")]
 mod rrd;
 
-pub use journal::{Entries, FRAME_PERIOD, Journal, JournalPolicy, JournalWorld};
+pub use journal::{Cycle, Entries, FRAME_PERIOD, Journal, JournalPolicy, JournalWorld};
 pub use timeline::{Run, Scorer, Scores};
 
 #[cfg(feature = "rerun")]

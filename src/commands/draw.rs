@@ -16,10 +16,10 @@ use packwright_draw::{
     Event, EventKind, Mark, Picture, Place, Product, ProductState, Sample, ToolPath, UR10_REACH,
 };
 use packwright_interface::outcome::{Report, Stage};
-use packwright_interface::{Contact, Joints, Observation, World, WorldError};
 use packwright_kinematics::Arm;
 use packwright_pipeline::episode::scene_of;
 use packwright_pipeline::reach::RobotWorkspace;
+use packwright_recording::Cycle;
 
 /// What the command line asked to draw.
 enum Subject {
@@ -307,70 +307,10 @@ fn mark(
     })
 }
 
-/// A `World` that passes everything to `inner` and remembers, per control
-/// cycle, the commanded joints and the suction: what `execute --svg`
-/// draws (the same for any planner and any world).
-pub struct Recorder<'a, W: World> {
-    inner: &'a mut W,
-    start: Joints,
-    commanded: Option<Joints>,
-    suction: bool,
-    /// (commanded joints, suction on, their largest change since the
-    /// cycle before in rad) per control cycle.
-    pub cycles: Vec<(Joints, bool, f64)>,
-}
-
-impl<'a, W: World> Recorder<'a, W> {
-    pub fn new(inner: &'a mut W) -> Recorder<'a, W> {
-        let observed = inner.observe();
-        Recorder {
-            start: observed.joints,
-            commanded: Some(observed.joints),
-            suction: observed.suction,
-            inner,
-            cycles: Vec::new(),
-        }
-    }
-}
-
-impl<W: World> World for Recorder<'_, W> {
-    fn control_period(&self) -> f64 {
-        self.inner.control_period()
-    }
-    fn observe(&self) -> Observation {
-        self.inner.observe()
-    }
-    fn command(&mut self, joints: &Joints) -> Result<(), WorldError> {
-        self.inner.command(joints)?;
-        self.commanded = Some(*joints);
-        Ok(())
-    }
-    fn set_suction(&mut self, on: bool) -> Result<(), WorldError> {
-        self.inner.set_suction(on)?;
-        self.suction = on;
-        Ok(())
-    }
-    fn step(&mut self) -> Result<(), WorldError> {
-        self.inner.step()?;
-        if let Some(q) = self.commanded {
-            let before = self.cycles.last().map_or(self.start, |(last, _, _)| *last);
-            let speed = q
-                .iter()
-                .zip(&before)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
-            self.cycles.push((q, self.suction, speed));
-        }
-        Ok(())
-    }
-    fn take_collisions(&mut self) -> Vec<Contact> {
-        self.inner.take_collisions()
-    }
-}
-
 /// The picture of a scenario or an order (`setup`) as `execute` ran it:
 /// the cell and its products at their start, the assignment, the tool
-/// path of `cycles` (forward kinematics of the commanded joints, coloured
+/// path of `cycles` (journalled by `JournalWorld`: forward kinematics of
+/// the commanded joints, coloured
 /// by the suction's stage), each fallback at the pick or release of its
 /// product and stage, and the first failure where the arm stopped.
 pub fn executed_picture(
@@ -378,7 +318,7 @@ pub fn executed_picture(
     name: &str,
     setup: &Setup,
     arm: &Arm,
-    cycles: &[(Joints, bool, f64)],
+    cycles: &[Cycle],
     report: &Report,
 ) -> Picture {
     let subject = Subject::Setup {
@@ -392,12 +332,12 @@ pub fn executed_picture(
     let suction = picture.cell.suction;
     let samples: Vec<Sample> = cycles
         .iter()
-        .map(|(q, on, speed)| {
-            let tip = arm.tool_tip(&base, q, suction);
+        .map(|c| {
+            let tip = arm.tool_tip(&base, &c.commanded, suction);
             Sample {
                 tip: [tip.x, tip.y, tip.z],
-                suction: *on,
-                speed: *speed,
+                suction: c.suction,
+                speed: c.speed,
             }
         })
         .collect();
@@ -464,7 +404,7 @@ pub fn write_executed_svg(
     name: &str,
     setup: &Setup,
     arm: &Arm,
-    cycles: &[(Joints, bool, f64)],
+    cycles: &[Cycle],
     report: &Report,
 ) -> anyhow::Result<()> {
     let picture = executed_picture(model, name, setup, arm, cycles, report);

@@ -3,11 +3,11 @@
 
 use crate::Exit;
 use crate::cli::ExecuteArgs;
-use crate::commands::draw::{Recorder, write_executed_svg};
+use crate::commands::draw::write_executed_svg;
 use crate::fsio::FsLoader;
 use packwright_interface::outcome::{Outcome, PlannerKind, Report};
 use packwright_interface::world::World;
-use packwright_interface::{Graph, Joints, Policy};
+use packwright_interface::{Graph, Policy};
 use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
 use packwright_nets::features::{node_rows, slot_rows};
@@ -120,11 +120,14 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
         return on_robot(args, &address, &name, &ep, &planner);
     }
     let mut sim = ep.simulator(ep.home()?)?;
-    let (report, cycles) = if args.record.is_some() {
-        simulate(&mut JournalWorld::new(&mut sim, &journal), &ep, &planner)
-    } else {
-        simulate(&mut sim, &ep, &planner)
-    };
+    // The journal records what `--svg` draws and `--record` writes.
+    let report = execute::run(
+        &mut JournalWorld::new(&mut sim, &journal),
+        &ep.arm,
+        &ep.task,
+        &planner,
+    );
+    let entries = journal.take();
     if let Some(path) = &args.svg {
         write_executed_svg(
             path,
@@ -132,12 +135,11 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
             &name,
             &setup,
             &ep.arm,
-            &cycles,
+            &entries.cycles,
             &report,
         )?;
     }
     if let Some(path) = &args.record {
-        let entries = journal.take();
         let title = format!("{name} ({})", report.planner);
         let score = |g: &Graph| {
             model
@@ -159,17 +161,6 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
         errln!("wrote {}", path.display());
     }
     print_outcome(args, &name, &report, "simulated")
-}
-
-/// Packs in `world`, recording what `--svg` draws.
-fn simulate<W: World>(
-    world: &mut W,
-    ep: &Episode,
-    planner: &Planner,
-) -> (Report, Vec<(Joints, bool, f64)>) {
-    let mut recorder = Recorder::new(world);
-    let report = execute::run(&mut recorder, &ep.arm, &ep.task, planner);
-    (report, recorder.cycles)
 }
 
 /// Prints the report and picks the exit code.
