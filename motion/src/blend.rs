@@ -459,7 +459,9 @@ pub fn blend_slowed(
     let cap = |k: usize| caps.get(k).copied().unwrap_or(1.0).clamp(0.0, 1.0);
     let stop_at = |k: usize| k + 1 == waypoints.len() || cap(k) <= 0.0;
     // Transitions: time-synchronised, any boundary state.
-    let (mut free_otg, mut free_input) = ruckig_input(&limits, start)?;
+    // (The legs' generator: an offline calculation keeps no state from
+    // one call to the next.)
+    let mut free_input = input.clone();
     free_input.synchronization = Synchronization::Time;
     let mut joins: Vec<Option<Join>> = Vec::with_capacity(legs.len());
     // Where the leg in hand was joined (its own time).
@@ -486,7 +488,7 @@ pub fn blend_slowed(
                 let share = cap(k) * (CANDIDATES - c) as f64 / CANDIDATES as f64;
                 let (leave, join) = (a.duration - share * room_a, share * room_b);
                 let Some(trajectory) = transition(
-                    &mut free_otg,
+                    &mut otg,
                     &mut free_input,
                     &limits,
                     &state(&a.trajectory, leave),

@@ -136,6 +136,8 @@ pub struct Checker {
     names: Vec<Body>,
     statics: Vec<Obstacle>,
     products: Vec<Obstacle>,
+    /// Per part, whether its pose in its link is the identity.
+    at_origin: Vec<bool>,
     /// The part pairs checked against each other (indices into `parts`,
     /// `i < j`, in that order): non-adjacent, and not among
     /// `body::touching_pairs`.
@@ -164,6 +166,10 @@ impl Checker {
             .collect();
         let allowed = body::touching_pairs(arm, cell.suction);
         let pairs = checked_pairs(&parts, &allowed);
+        let at_origin = parts
+            .iter()
+            .map(|p| p.local == Isometry3::identity())
+            .collect();
         Checker {
             arm: arm.clone(),
             base,
@@ -171,6 +177,7 @@ impl Checker {
             names,
             statics,
             products: Vec::new(),
+            at_origin,
             pairs,
             held_padding,
             suction: cell.suction,
@@ -224,11 +231,24 @@ impl Checker {
             return Some(Hit::InvalidJoints);
         }
         let links = self.arm.link_poses(&self.base, q);
+        // A part placed at its link's origin has its link's pose (times
+        // the identity, which changes no value): converted once per link.
+        let mut last: Option<(usize, Pose)> = None;
         let placed: Vec<(Pose, Aabb)> = self
             .parts
             .iter()
-            .map(|part| {
-                let p = pose(&(links[part.link()] * part.local));
+            .zip(&self.at_origin)
+            .map(|(part, &at_origin)| {
+                let link = part.link();
+                let p = match last {
+                    Some((l, p)) if at_origin && l == link => p,
+                    _ if at_origin => {
+                        let p = pose(&links[link]);
+                        last = Some((link, p));
+                        p
+                    }
+                    _ => pose(&(links[link] * part.local)),
+                };
                 (p, part.shape.compute_aabb(&p))
             })
             .collect();
