@@ -15,7 +15,7 @@ use packwright_interface::scene::CellScene;
 use packwright_interface::world::Body;
 use parry3d::math::{Pose, Vector};
 use parry3d::query;
-use parry3d::shape::SharedShape;
+use parry3d::shape::{Capsule, Cuboid, SharedShape};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -192,10 +192,162 @@ pub fn touching_pairs(arm: &Arm, suction: f64) -> Vec<(usize, usize)> {
     allowed
 }
 
-/// Whether two shapes intersect. An unsupported pair cannot happen with
-/// capsules and cuboids; it counts as a collision, to stay on the safe side.
+/// Whether two shapes intersect: parry's answer ([`exact_intersects`]).
+///
+/// Two capsules (every arm part of the UR10) are first decided by the
+/// distance between their axis segments, computed in closed form (f64,
+/// from the same f32 poses and shapes parry is given): farther apart than
+/// the sum of their radii by more than [`DECIDED_MARGIN`], they are apart;
+/// nearer by more than it, they intersect. Only a pair within the margin
+/// of touching goes to parry's GJK. The margin is about a thousand times
+/// GJK's own tolerance on these shapes (its termination threshold is
+/// 1.2e-6 relative, on shapes of about a metre), so the answer is parry's
+/// (property-tested against it in `tests/intersects.rs`).
 pub fn intersects(p1: &Pose, s1: &SharedShape, p2: &Pose, s2: &SharedShape) -> bool {
+    if let (Some(c1), Some(c2)) = (s1.as_capsule(), s2.as_capsule())
+        && let Some(answer) = capsules_decided(p1, c1, p2, c2)
+    {
+        return answer;
+    }
+    let apart = match (s1.as_capsule(), s2.as_cuboid()) {
+        (Some(c), Some(b)) => capsule_clear_of_cuboid(p1, c, p2, b),
+        _ => match (s1.as_cuboid(), s2.as_capsule()) {
+            (Some(b), Some(c)) => capsule_clear_of_cuboid(p2, c, p1, b),
+            _ => false,
+        },
+    };
+    !apart && exact_intersects(p1, s1, p2, s2)
+}
+
+/// Whether two shapes intersect, by parry alone (GJK for capsules and
+/// cuboids). An unsupported pair cannot happen with capsules and cuboids;
+/// it counts as a collision, to stay on the safe side.
+pub fn exact_intersects(p1: &Pose, s1: &SharedShape, p2: &Pose, s2: &SharedShape) -> bool {
     query::intersection_test(p1, s1.as_ref(), p2, s2.as_ref()).map_or(true, |i| i.intersecting)
+}
+
+/// How far from touching (m) two capsules must be, apart or into each
+/// other, for [`intersects`] to answer without GJK.
+pub const DECIDED_MARGIN: f64 = 1e-3;
+
+/// Two capsules' answer when the distance between their axes is more than
+/// [`DECIDED_MARGIN`] from the sum of their radii; `None` otherwise (or
+/// for anything not finite).
+fn capsules_decided(p1: &Pose, c1: &Capsule, p2: &Pose, c2: &Capsule) -> Option<bool> {
+    let world = |p: &Pose, v: Vector| {
+        let w = p.transform_point(v);
+        [f64::from(w.x), f64::from(w.y), f64::from(w.z)]
+    };
+    let d2 = segments_distance_squared(
+        world(p1, c1.segment.a),
+        world(p1, c1.segment.b),
+        world(p2, c2.segment.a),
+        world(p2, c2.segment.b),
+    );
+    let reach = f64::from(c1.radius) + f64::from(c2.radius);
+    let d = d2.sqrt();
+    if !(d.is_finite() && reach.is_finite()) {
+        None
+    } else if d > reach + DECIDED_MARGIN {
+        Some(false)
+    } else if d < reach - DECIDED_MARGIN {
+        Some(true)
+    } else {
+        None
+    }
+}
+
+/// Whether a plane separates a capsule from a cuboid by more than
+/// [`DECIDED_MARGIN`]: a separating-axis test on the cuboid's three axes
+/// and the three crosses of the capsule's axis with them (the capsule's
+/// projection on a unit axis is its segment's, grown by its radius).
+/// `false` says nothing: GJK decides.
+fn capsule_clear_of_cuboid(pc: &Pose, c: &Capsule, pb: &Pose, b: &Cuboid) -> bool {
+    // The segment in the cuboid's frame, in f64.
+    let local = |v: Vector| {
+        let w = pb.inverse_transform_point(pc.transform_point(v));
+        [f64::from(w.x), f64::from(w.y), f64::from(w.z)]
+    };
+    let (a, e) = (local(c.segment.a), local(c.segment.b));
+    let h = [
+        f64::from(b.half_extents.x),
+        f64::from(b.half_extents.y),
+        f64::from(b.half_extents.z),
+    ];
+    let r = f64::from(c.radius);
+    if !(a.iter().chain(&e).chain(&h).all(|x| x.is_finite()) && r.is_finite()) {
+        return false;
+    }
+    let clear = DECIDED_MARGIN + r;
+    // The cuboid's axes.
+    for k in 0..3 {
+        if a[k].min(e[k]) > h[k] + clear || a[k].max(e[k]) < -h[k] - clear {
+            return true;
+        }
+    }
+    // The segment's direction crossed with each axis.
+    let d = [e[0] - a[0], e[1] - a[1], e[2] - a[2]];
+    for k in 0..3 {
+        let mut n = [0.0; 3];
+        n[(k + 1) % 3] = d[(k + 2) % 3];
+        n[(k + 2) % 3] = -d[(k + 1) % 3];
+        let norm = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        if norm < 1e-9 {
+            continue;
+        }
+        let s = (a[0] * n[0] + a[1] * n[1] + a[2] * n[2]) / norm;
+        let extent = (h[0] * n[0].abs() + h[1] * n[1].abs() + h[2] * n[2].abs()) / norm;
+        if s.abs() > extent + clear {
+            return true;
+        }
+    }
+    false
+}
+
+/// The squared distance between segments `p1`–`q1` and `p2`–`q2`
+/// (Ericson, *Real-Time Collision Detection*, 5.1.9; degenerate segments
+/// are points).
+pub fn segments_distance_squared(p1: [f64; 3], q1: [f64; 3], p2: [f64; 3], q2: [f64; 3]) -> f64 {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let d1 = sub(q1, p1);
+    let d2 = sub(q2, p2);
+    let r = sub(p1, p2);
+    let a = dot(d1, d1);
+    let e = dot(d2, d2);
+    let f = dot(d2, r);
+    const TINY: f64 = 1e-18;
+    let (s, t) = if a <= TINY && e <= TINY {
+        (0.0, 0.0)
+    } else if a <= TINY {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = dot(d1, r);
+        if e <= TINY {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = dot(d1, d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > TINY * a * e {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    let c1 = [p1[0] + d1[0] * s, p1[1] + d1[1] * s, p1[2] + d1[2] * s];
+    let c2 = [p2[0] + d2[0] * t, p2[1] + d2[1] * t, p2[2] + d2[2] * t];
+    let g = sub(c1, c2);
+    dot(g, g)
 }
 
 /// Who a fixture belongs to.

@@ -1,7 +1,8 @@
 //! Collision checks, RRT-Connect and blending a product's motion on the
 //! UR10 in a bench cell.
 //!
-//! `cargo bench -p packwright-runtime --bench planning`
+//! `cargo bench -p packwright-motion --bench planning` (instruction
+//! counts of the checked blend: `examples/profile_blend.rs` under callgrind)
 
 #[path = "../tests/common/mod.rs"]
 mod common;

@@ -136,8 +136,92 @@ struct Leg {
 }
 
 /// Position, velocity, acceleration and jerk of `trajectory` at its own
-/// time `t`.
+/// time `t`: [`Trajectory::at_time`]'s values, bit for bit ([`along`]).
 fn state(trajectory: &Trajectory<DOF>, t: f64) -> [Joints; 4] {
+    let mut out = [[0.0; DOF]; 4];
+    along(trajectory, t, |j, p, v, a, jerk| {
+        out[0][j] = p;
+        out[1][j] = v;
+        out[2][j] = a;
+        out[3][j] = jerk;
+    });
+    out
+}
+
+/// The position of `trajectory` at its own time `t` ([`state`]'s first
+/// row, computed alone: the commands need no more).
+fn position(trajectory: &Trajectory<DOF>, t: f64) -> Joints {
+    let mut out = [0.0; DOF];
+    along(trajectory, t, |j, p, _, _, _| out[j] = p);
+    out
+}
+
+/// Calls `set(joint, position, velocity, acceleration, jerk)` for each
+/// joint of `trajectory` at its own time `t`, with exactly the arithmetic
+/// of rsruckig's `Trajectory::at_time` (3.0: the phase found the same way,
+/// the same integration formula), without its per-call buffers, for a
+/// trajectory of one section (every trajectory here: no intermediate
+/// waypoints); any other goes through `at_time` itself. A test compares
+/// the two bit for bit.
+fn along(trajectory: &Trajectory<DOF>, t: f64, mut set: impl FnMut(usize, f64, f64, f64, f64)) {
+    let integrate = |t: f64, p0: f64, v0: f64, a0: f64, j: f64| {
+        (
+            p0 + t * (v0 + t * (a0 / 2.0 + t * j / 6.0)),
+            v0 + t * (a0 + t * j / 2.0),
+            a0 + t * j,
+        )
+    };
+    let profiles = trajectory.get_profiles();
+    let duration = trajectory.get_duration();
+    let single = profiles.len() == 1
+        && (t >= duration || trajectory.cumulative_times.first().is_some_and(|c| *c > t));
+    if !single {
+        let [p, v, a, jk] = at_time(trajectory, t);
+        for j in 0..DOF {
+            set(j, p[j], v[j], a[j], jk[j]);
+        }
+        return;
+    }
+    let section = &profiles[0];
+    for j in 0..DOF {
+        let p = &section[j];
+        if t >= duration {
+            let local = t - (p.brake.duration + p.t_sum[6]);
+            let (q, v, a) = integrate(local, p.p[7], p.v[7], p.a[7], 0.0);
+            set(j, q, v, a, 0.0);
+            continue;
+        }
+        let mut local = t;
+        if p.brake.duration > 0.0 {
+            if local < p.brake.duration {
+                let index = if local < p.brake.t[0] { 0 } else { 1 };
+                if index > 0 {
+                    local -= p.brake.t[index - 1];
+                }
+                let b = &p.brake;
+                let (q, v, a) = integrate(local, b.p[index], b.v[index], b.a[index], b.j[index]);
+                set(j, q, v, a, b.j[index]);
+                continue;
+            }
+            local -= p.brake.duration;
+        }
+        if local >= p.t_sum[6] {
+            let (q, v, a) = integrate(local - p.t_sum[6], p.p[7], p.v[7], p.a[7], 0.0);
+            set(j, q, v, a, 0.0);
+            continue;
+        }
+        let phase = p.t_sum.iter().position(|s| *s > local).unwrap_or(6);
+        if phase > 0 {
+            local -= p.t_sum[phase - 1];
+        }
+        let (q, v, a) = integrate(local, p.p[phase], p.v[phase], p.a[phase], p.j[phase]);
+        set(j, q, v, a, p.j[phase]);
+    }
+}
+
+/// Position, velocity, acceleration and jerk of `trajectory` at its own
+/// time `t`, by rsruckig's `at_time`.
+fn at_time(trajectory: &Trajectory<DOF>, t: f64) -> [Joints; 4] {
     let mut p = DataArrayOrVec::Stack([0.0; DOF]);
     let mut v = DataArrayOrVec::Stack([0.0; DOF]);
     let mut a = DataArrayOrVec::Stack([0.0; DOF]);
@@ -375,7 +459,9 @@ pub fn blend_slowed(
     let cap = |k: usize| caps.get(k).copied().unwrap_or(1.0).clamp(0.0, 1.0);
     let stop_at = |k: usize| k + 1 == waypoints.len() || cap(k) <= 0.0;
     // Transitions: time-synchronised, any boundary state.
-    let (mut free_otg, mut free_input) = ruckig_input(&limits, start)?;
+    // (The legs' generator: an offline calculation keeps no state from
+    // one call to the next.)
+    let mut free_input = input.clone();
     free_input.synchronization = Synchronization::Time;
     let mut joins: Vec<Option<Join>> = Vec::with_capacity(legs.len());
     // Where the leg in hand was joined (its own time).
@@ -402,7 +488,7 @@ pub fn blend_slowed(
                 let share = cap(k) * (CANDIDATES - c) as f64 / CANDIDATES as f64;
                 let (leave, join) = (a.duration - share * room_a, share * room_b);
                 let Some(trajectory) = transition(
-                    &mut free_otg,
+                    &mut otg,
                     &mut free_input,
                     &limits,
                     &state(&a.trajectory, leave),
@@ -519,12 +605,12 @@ fn sample(
                 } else if local <= 1e-12 {
                     l.from
                 } else {
-                    state(&l.trajectory, local)[0]
+                    position(&l.trajectory, local)
                 }
             }
             Piece::Rest { k } => waypoints[k],
             Piece::Join { trajectory } => {
-                state(trajectory, (t - begin).min(trajectory.get_duration()))[0]
+                position(trajectory, (t - begin).min(trajectory.get_duration()))
             }
         };
         if q.iter().any(|v| !v.is_finite()) {
@@ -579,4 +665,85 @@ fn sample(
         at,
         starts,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use packwright_kinematics::Arm;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// `state` and `position` give `at_time`'s values bit for bit, on
+    /// rest-to-rest legs and on transitions between random moving states
+    /// (some of them beyond the limits, so Ruckig brakes first), at random
+    /// times, phase boundaries, before the start and past the end.
+    #[test]
+    fn state_is_at_time_bit_for_bit() {
+        let arm = Arm::ur10();
+        let limits = arm.limits;
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let joints = |rng: &mut ChaCha8Rng| -> Joints {
+            std::array::from_fn(|j| rng.random_range(limits[j].lower / 2.0..limits[j].upper / 2.0))
+        };
+        let (mut otg, mut input) = ruckig_input(&limits, [0.0; DOF]).expect("limits");
+        let (mut free, mut free_input) = ruckig_input(&limits, [0.0; DOF]).expect("limits");
+        free_input.synchronization = Synchronization::Time;
+        let (mut compared, mut braking) = (0, 0);
+        for k in 0..300 {
+            let trajectory = if k % 2 == 0 {
+                rest_to_rest(&mut otg, &mut input, joints(&mut rng), joints(&mut rng), 0)
+                    .expect("a leg")
+            } else {
+                // Up to 1.5 times the velocity and acceleration limits.
+                let moving = |rng: &mut ChaCha8Rng, q: Joints| -> [Joints; 4] {
+                    [
+                        q,
+                        std::array::from_fn(|j| rng.random_range(-1.5..1.5) * limits[j].velocity),
+                        std::array::from_fn(|j| {
+                            rng.random_range(-1.5..1.5) * limits[j].acceleration
+                        }),
+                        [0.0; DOF],
+                    ]
+                };
+                let q = joints(&mut rng);
+                let (from, to) = (moving(&mut rng, q), joints(&mut rng));
+                free_input.current_position.copy_from_slice(&from[0]);
+                free_input.current_velocity.copy_from_slice(&from[1]);
+                free_input.current_acceleration.copy_from_slice(&from[2]);
+                free_input.target_position.copy_from_slice(&to);
+                free_input.target_velocity.fill(0.0);
+                free_input.target_acceleration.fill(0.0);
+                let mut trajectory = Trajectory::new(None);
+                match free.calculate(&free_input, &mut trajectory) {
+                    Ok(RuckigResult::Working) | Ok(RuckigResult::Finished) => trajectory,
+                    _ => continue,
+                }
+            };
+            let duration = trajectory.get_duration();
+            braking += usize::from(
+                trajectory.get_profiles()[0]
+                    .iter()
+                    .any(|p| p.brake.duration > 0.0),
+            );
+            let mut times = vec![-0.01, 0.0, duration, duration + 0.013];
+            breakpoints(&trajectory, &mut times);
+            times.extend((0..40).map(|_| rng.random_range(0.0..duration.max(1e-6))));
+            for t in times {
+                let (fast, slow) = (state(&trajectory, t), at_time(&trajectory, t));
+                for d in 0..4 {
+                    for j in 0..DOF {
+                        assert_eq!(
+                            fast[d][j].to_bits(),
+                            slow[d][j].to_bits(),
+                            "derivative {d}, joint {j}, t {t}"
+                        );
+                    }
+                }
+                assert_eq!(position(&trajectory, t), slow[0]);
+                compared += 1;
+            }
+        }
+        assert!(compared > 10_000 && braking > 10, "{compared} / {braking}");
+    }
 }

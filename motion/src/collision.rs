@@ -11,6 +11,13 @@
 //! product against everything but the cup and the last link, which hold
 //! it. A motion between two configurations is checked at joint steps of at
 //! most 1 degree.
+//!
+//! Cost (issue 11): forward kinematics runs once per configuration, each
+//! part's pose and box once; obstacles whose box misses the whole arm's are
+//! skipped; narrow tests go through `body::intersects`, which decides
+//! capsule pairs in closed form and goes to GJK only within 1 mm of
+//! touching. The answers (which bodies included) are those of the plain
+//! check, kept as the reference in this module's tests.
 
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use packwright_interface::outcome::Hit;
@@ -111,6 +118,22 @@ pub struct ProductBody {
     pub yaw: f64,
 }
 
+/// The part pairs a checker tests against each other: indices into
+/// `parts`, `i < j` in order, whose links (the cup counted as its own
+/// part) are not adjacent and not `allowed`.
+fn checked_pairs(parts: &[ArmPart], allowed: &[(usize, usize)]) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    for (i, a) in parts.iter().enumerate() {
+        for (j, b) in parts.iter().enumerate().skip(i + 1) {
+            let (la, lb) = (a.part.min(b.part), a.part.max(b.part));
+            if !body::adjacent(la, lb) && !allowed.contains(&(la, lb)) {
+                out.push((i, j));
+            }
+        }
+    }
+    out
+}
+
 /// Checks arm configurations and motions against a cell.
 #[derive(Clone)]
 pub struct Checker {
@@ -120,8 +143,12 @@ pub struct Checker {
     names: Vec<Body>,
     statics: Vec<Obstacle>,
     products: Vec<Obstacle>,
-    /// Part pairs never checked against each other.
-    allowed: Vec<(usize, usize)>,
+    /// Per part, whether its pose in its link is the identity.
+    at_origin: Vec<bool>,
+    /// The part pairs checked against each other (indices into `parts`,
+    /// `i < j`, in that order): non-adjacent, and not among
+    /// `body::touching_pairs`.
+    pairs: Vec<(usize, usize)>,
     held_padding: f64,
     /// Length of the cup below the flange.
     suction: f64,
@@ -144,6 +171,12 @@ impl Checker {
             .iter()
             .map(|f| Obstacle::new(f.body(cell), f.centre, f.half, 0.0))
             .collect();
+        let allowed = body::touching_pairs(arm, cell.suction);
+        let pairs = checked_pairs(&parts, &allowed);
+        let at_origin = parts
+            .iter()
+            .map(|p| p.local == Isometry3::identity())
+            .collect();
         Checker {
             arm: arm.clone(),
             base,
@@ -151,7 +184,8 @@ impl Checker {
             names,
             statics,
             products: Vec::new(),
-            allowed: body::touching_pairs(arm, cell.suction),
+            at_origin,
+            pairs,
             held_padding,
             suction: cell.suction,
         }
@@ -187,69 +221,65 @@ impl Checker {
             .collect();
     }
 
-    /// World poses of every part for joints `q`.
-    fn part_poses(&self, q: &Joints) -> Vec<Pose> {
-        let links = self.arm.link_poses(&self.base, q);
-        self.parts
-            .iter()
-            .map(|p| pose(&(links[p.link()] * p.local)))
-            .collect()
-    }
-
-    /// Colliding non-adjacent part pairs (by link index), skipping `allowed`.
-    fn self_pairs(
-        &self,
-        poses: &[Pose],
-        allowed: &[(usize, usize)],
-    ) -> Vec<((usize, usize), (usize, usize))> {
-        let mut out = Vec::new();
-        let boxes: Vec<Aabb> = self
-            .parts
-            .iter()
-            .zip(poses)
-            .map(|(part, p)| part.shape.compute_aabb(p))
-            .collect();
-        for (i, a) in self.parts.iter().enumerate() {
-            for (j, b) in self.parts.iter().enumerate().skip(i + 1) {
-                let (la, lb) = (a.part.min(b.part), a.part.max(b.part));
-                if body::adjacent(la, lb)
-                    || allowed.contains(&(la, lb))
-                    || !boxes[i].intersects(&boxes[j])
-                {
-                    continue;
-                }
-                if intersects(&poses[i], &a.shape, &poses[j], &b.shape) {
-                    out.push(((la, lb), (i, j)));
-                }
-            }
-        }
-        out
-    }
-
     /// The first collision of the arm (and `held`) at joints `q`. The
     /// product named `ignore` (the one being picked, or just released) is
     /// ignored by the cup alone, which touches its top face: a link that
     /// reaches it still collides.
+    ///
+    /// In order (the first found is the answer): each part against the
+    /// obstacles (the fixed ones, then the products), the checked part
+    /// pairs, the held product against the obstacles, then against the
+    /// links. Forward kinematics runs once: each part's pose and bounding
+    /// box are computed once and shared by every test; an obstacle whose
+    /// box misses the whole arm's is skipped for every part (it misses
+    /// each part's).
     pub fn check(&self, q: &Joints, held: Option<&Held>, ignore: Option<&str>) -> Option<Hit> {
         if q.iter().any(|v| !v.is_finite()) {
             return Some(Hit::InvalidJoints);
         }
-        let poses = self.part_poses(q);
-        let skipped = |o: &Obstacle, by_cup: bool| match &o.body {
-            Body::Product(n) => {
-                (by_cup && Some(n.as_str()) == ignore) || held.is_some_and(|h| &h.name == n)
-            }
+        let links = self.arm.link_poses(&self.base, q);
+        // A part placed at its link's origin has its link's pose (times
+        // the identity, which changes no value): converted once per link.
+        let mut last: Option<(usize, Pose)> = None;
+        let placed: Vec<(Pose, Aabb)> = self
+            .parts
+            .iter()
+            .zip(&self.at_origin)
+            .map(|(part, &at_origin)| {
+                let link = part.link();
+                let p = match last {
+                    Some((l, p)) if at_origin && l == link => p,
+                    _ if at_origin => {
+                        let p = pose(&links[link]);
+                        last = Some((link, p));
+                        p
+                    }
+                    _ => pose(&(links[link] * part.local)),
+                };
+                (p, part.shape.compute_aabb(&p))
+            })
+            .collect();
+        let whole = placed
+            .iter()
+            .map(|(_, b)| *b)
+            .reduce(|a, b| a.merged(&b))
+            .unwrap_or_else(Aabb::new_invalid);
+        let held_name = held.map(|h| h.name.as_str());
+        let is = |o: &Obstacle, name: Option<&str>| match &o.body {
+            Body::Product(n) => Some(n.as_str()) == name,
             _ => false,
         };
-        let obstacles = move |by_cup: bool| {
-            self.statics
-                .iter()
-                .chain(self.products.iter().filter(move |o| !skipped(o, by_cup)))
-        };
-        for (part, p) in self.parts.iter().zip(&poses) {
-            let aabb = part.shape.compute_aabb(p);
-            for o in obstacles(part.part == CUP) {
-                if o.is_table && part.part <= 1 {
+        // The obstacles near the arm, the held product never one of them.
+        let near: Vec<&Obstacle> = self
+            .statics
+            .iter()
+            .chain(&self.products)
+            .filter(|o| !is(o, held_name) && o.aabb.intersects(&whole))
+            .collect();
+        for (part, (p, aabb)) in self.parts.iter().zip(&placed) {
+            let by_cup = part.part == CUP;
+            for o in &near {
+                if (o.is_table && part.part <= 1) || (by_cup && is(o, ignore)) {
                     continue;
                 }
                 if aabb.intersects(&o.aabb) && intersects(p, &part.shape, &o.pose, &o.shape) {
@@ -260,14 +290,20 @@ impl Checker {
                 }
             }
         }
-        if let Some(((la, lb), _)) = self.self_pairs(&poses, &self.allowed).first() {
-            return Some(Hit::Bodies {
-                a: self.names[*la].clone(),
-                b: self.names[*lb].clone(),
-            });
+        for &(i, j) in &self.pairs {
+            let ((pi, bi), (pj, bj)) = (&placed[i], &placed[j]);
+            if bi.intersects(bj) && intersects(pi, &self.parts[i].shape, pj, &self.parts[j].shape) {
+                let (a, b) = (self.parts[i].part, self.parts[j].part);
+                return Some(Hit::Bodies {
+                    a: self.names[a.min(b)].clone(),
+                    b: self.names[a.max(b)].clone(),
+                });
+            }
         }
         if let Some(h) = held {
-            let flange = self.arm.flange_pose(&self.base, q);
+            // The flange from the same links (the same arithmetic as
+            // `Arm::flange_pose`).
+            let flange = links[DOF] * self.arm.flange;
             let pad = self.held_padding;
             // Leaving its support, the box keeps its margin above but ends
             // LIFT_CLEARANCE short of the bottom (the product's +z is the
@@ -286,7 +322,8 @@ impl Checker {
             )));
             let aabb = cuboid.compute_aabb(&hp);
             let name = Body::Held(h.name.clone());
-            for o in obstacles(true) {
+            let obstacles = self.statics.iter().chain(&self.products);
+            for o in obstacles.filter(|o| !is(o, held_name) && !is(o, ignore)) {
                 if aabb.intersects(&o.aabb) && intersects(&hp, &cuboid, &o.pose, &o.shape) {
                     return Some(Hit::Bodies {
                         a: name,
@@ -294,7 +331,7 @@ impl Checker {
                     });
                 }
             }
-            for (part, p) in self.parts.iter().zip(&poses) {
+            for (part, (p, _)) in self.parts.iter().zip(&placed) {
                 if part.part < DOF && intersects(&hp, &cuboid, p, &part.shape) {
                     return Some(Hit::Bodies {
                         a: name,
@@ -330,5 +367,206 @@ impl Checker {
             let q: Joints = std::array::from_fn(|j| q0[j] + (q1[j] - q0[j]) * t);
             self.check(&q, held, ignore)
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use packwright_interface::scene::{BoxSpec, CellScene};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The checker as it was before its fast path (issue 11): every part's
+    /// pose and box computed apart, every obstacle tested against every
+    /// part, every pair's adjacency looked up, parry's GJK for every
+    /// narrow test. [`Checker::check`] must give its answers.
+    fn reference_check(
+        c: &Checker,
+        allowed: &[(usize, usize)],
+        q: &Joints,
+        held: Option<&Held>,
+        ignore: Option<&str>,
+    ) -> Option<Hit> {
+        use body::exact_intersects as intersects;
+        if q.iter().any(|v| !v.is_finite()) {
+            return Some(Hit::InvalidJoints);
+        }
+        let links = c.arm.link_poses(&c.base, q);
+        let poses: Vec<Pose> = c
+            .parts
+            .iter()
+            .map(|p| pose(&(links[p.link()] * p.local)))
+            .collect();
+        let skipped = |o: &Obstacle, by_cup: bool| match &o.body {
+            Body::Product(n) => {
+                (by_cup && Some(n.as_str()) == ignore) || held.is_some_and(|h| &h.name == n)
+            }
+            _ => false,
+        };
+        let obstacles = move |by_cup: bool| {
+            c.statics
+                .iter()
+                .chain(c.products.iter().filter(move |o| !skipped(o, by_cup)))
+        };
+        for (part, p) in c.parts.iter().zip(&poses) {
+            let aabb = part.shape.compute_aabb(p);
+            for o in obstacles(part.part == CUP) {
+                if o.is_table && part.part <= 1 {
+                    continue;
+                }
+                if aabb.intersects(&o.aabb) && intersects(p, &part.shape, &o.pose, &o.shape) {
+                    return Some(Hit::Bodies {
+                        a: c.names[part.part].clone(),
+                        b: o.body.clone(),
+                    });
+                }
+            }
+        }
+        let boxes: Vec<Aabb> = c
+            .parts
+            .iter()
+            .zip(&poses)
+            .map(|(part, p)| part.shape.compute_aabb(p))
+            .collect();
+        for (i, a) in c.parts.iter().enumerate() {
+            for (j, b) in c.parts.iter().enumerate().skip(i + 1) {
+                let (la, lb) = (a.part.min(b.part), a.part.max(b.part));
+                if body::adjacent(la, lb)
+                    || allowed.contains(&(la, lb))
+                    || !boxes[i].intersects(&boxes[j])
+                {
+                    continue;
+                }
+                if intersects(&poses[i], &a.shape, &poses[j], &b.shape) {
+                    return Some(Hit::Bodies {
+                        a: c.names[la].clone(),
+                        b: c.names[lb].clone(),
+                    });
+                }
+            }
+        }
+        if let Some(h) = held {
+            let flange = c.arm.flange_pose(&c.base, q);
+            let pad = c.held_padding;
+            let (half_z, shift) = if h.leaving_support {
+                let cut = pad + LIFT_CLEARANCE;
+                (h.size[2] / 2.0 + pad - cut / 2.0, -cut / 2.0)
+            } else {
+                (h.size[2] / 2.0 + pad, 0.0)
+            };
+            let hp = pose(&(flange * h.in_flange * Isometry3::translation(0.0, 0.0, shift)));
+            let cuboid = SharedShape::new(Cuboid::new(Vector::new(
+                (h.size[0] / 2.0 + pad) as f32,
+                (h.size[1] / 2.0 + pad) as f32,
+                half_z as f32,
+            )));
+            let aabb = cuboid.compute_aabb(&hp);
+            let name = Body::Held(h.name.clone());
+            for o in obstacles(true) {
+                if aabb.intersects(&o.aabb) && intersects(&hp, &cuboid, &o.pose, &o.shape) {
+                    return Some(Hit::Bodies {
+                        a: name,
+                        b: o.body.clone(),
+                    });
+                }
+            }
+            for (part, p) in c.parts.iter().zip(&poses) {
+                if part.part < DOF && intersects(&hp, &cuboid, p, &part.shape) {
+                    return Some(Hit::Bodies {
+                        a: name,
+                        b: c.names[part.part].clone(),
+                    });
+                }
+            }
+        }
+        None
+    }
+
+    fn cell() -> CellScene {
+        CellScene {
+            name: "c".into(),
+            base: [0.05, -0.02, 0.0],
+            suction: 0.1,
+            lift: 0.15,
+            speed: 1.0,
+            grip_settle: 0.1,
+            release_settle: 0.5,
+            descent: 1.0,
+            pending: ([0.45, -0.5], [0.85, -0.1]),
+            boxes: vec![BoxSpec {
+                name: "tray".into(),
+                centre: [0.0, 0.65],
+                size: [0.4, 0.3, 0.08],
+            }],
+            slots: vec![],
+        }
+    }
+
+    /// Over thousands of configurations, free and colliding, near the
+    /// products and the box and anywhere, with and without a held product
+    /// and an ignored one, the checker's answer (which bodies included) is
+    /// the reference's.
+    #[test]
+    fn the_fast_check_answers_as_the_reference() {
+        let arm = Arm::ur10();
+        let cell = cell();
+        let mut checker = Checker::new(&arm, &cell);
+        let allowed = body::touching_pairs(&arm, cell.suction);
+        let products: Vec<ProductBody> = (0..6)
+            .map(|i| ProductBody {
+                name: format!("P{i}"),
+                centre: [0.45 + 0.07 * i as f64, -0.2 - 0.03 * i as f64, 0.03],
+                size: [0.05, 0.06, 0.06],
+                yaw: 0.3 * i as f64,
+            })
+            .collect();
+        checker.set_products(&products);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let held = Held::under_cup("P2", [0.05, 0.06, 0.06], 0.1, Vector3::new(0.004, 0.0, 0.0));
+        let (mut free, mut hit) = (0, 0);
+        for k in 0..6_000 {
+            // Tool down over the pending area or the box, give or take,
+            // or anywhere in the joint ranges.
+            let q: Joints = if k % 3 == 2 {
+                std::array::from_fn(|j| {
+                    let l = &arm.limits[j];
+                    rng.random_range(l.lower.max(-3.3)..=l.upper.min(3.3))
+                })
+            } else {
+                let (x, y) = if k % 2 == 0 {
+                    (rng.random_range(0.4..0.9), rng.random_range(-0.5..-0.1))
+                } else {
+                    (rng.random_range(-0.25..0.25), rng.random_range(0.45..0.85))
+                };
+                let tip = nalgebra::Point3::new(x, y, rng.random_range(0.0..0.3));
+                let near = [0.0, -1.57, 1.57, -1.57, -1.57, 0.0];
+                let Some(q) =
+                    arm.tool_down_ik(checker.base(), tip, rng.random_range(-1.0..1.0), 0.1, &near)
+                else {
+                    continue;
+                };
+                q
+            };
+            let h = match k % 4 {
+                0 => None,
+                1 => Some(held.clone()),
+                2 => Some(held.clone().leaving_support()),
+                _ => None,
+            };
+            let ignore = (k % 5 < 2).then_some("P1");
+            let got = checker.check(&q, h.as_ref(), ignore);
+            assert_eq!(
+                got,
+                reference_check(&checker, &allowed, &q, h.as_ref(), ignore),
+                "at {q:?}, held {h:?}, ignoring {ignore:?}"
+            );
+            if got.is_some() {
+                hit += 1;
+            } else {
+                free += 1;
+            }
+        }
+        assert!(free > 500 && hit > 500, "{free} free, {hit} colliding");
     }
 }

@@ -1,0 +1,92 @@
+//! The planning bench's "blend a product's 7 sub-goals and check them",
+//! a fixed number of times, for instruction counts under callgrind
+//! (repeatable where wall times on a shared machine are not):
+//!
+//! `cargo build --release -p packwright-motion --example profile_blend`
+//! `valgrind --tool=callgrind target/release/examples/profile_blend 20`
+//!
+//! The argument is the number of checked blends (default 20); `blend`
+//! as a second argument times the blend alone.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+use common::bench_cell;
+
+use nalgebra::Point3;
+use packwright_kinematics::Arm;
+use packwright_motion::blend::blend;
+use packwright_motion::collision::{Checker, ProductBody};
+use packwright_motion::execute::{Load, checked_blend, reach};
+use std::f64::consts::FRAC_PI_2;
+use std::hint::black_box;
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let runs: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(20);
+    let alone = args.next().is_some_and(|a| a == "blend");
+    let arm = Arm::ur10();
+    let cell = bench_cell();
+    let mut checker = Checker::new(&arm, &cell);
+    let cubes: Vec<ProductBody> = [
+        [0.5, -0.2],
+        [0.62, -0.2],
+        [0.74, -0.2],
+        [0.56, -0.38],
+        [0.68, -0.38],
+    ]
+    .iter()
+    .enumerate()
+    .map(|(i, at)| ProductBody {
+        name: format!("P{i}"),
+        centre: [at[0], at[1], 0.025],
+        size: [0.05; 3],
+        yaw: 0.0,
+    })
+    .collect();
+    checker.set_products(&cubes);
+    let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
+    let at = |x: f64, y: f64, z: f64| {
+        reach(&checker, Point3::new(x, y, z), 0.0, &ready, Load::FREE).expect("reachable")
+    };
+    let product = [
+        at(0.62, -0.2, 0.15),
+        at(0.62, -0.2, 0.05),
+        at(0.62, -0.2, 0.15),
+        at(0.35, 0.25, 0.25),
+        at(0.0, 0.6, 0.15),
+        at(0.0, 0.6, 0.08),
+        at(0.0, 0.6, 0.15),
+    ];
+    let stops = [false, true, false, false, false, true, false];
+    let start = at(0.5, -0.2, 0.3);
+    let mut commands = 0;
+    // A digest of the commands' bits (FNV-1a), to compare builds.
+    let mut digest: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |samples: &[[f64; 6]]| {
+        for q in samples {
+            for v in q {
+                digest = (digest ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+    };
+    for _ in 0..runs {
+        if alone {
+            let b = blend(arm.limits, black_box(start), &product, &stops).expect("blends");
+            commands += b.samples.len();
+            eat(&b.samples);
+        } else {
+            let b = checked_blend(
+                &arm,
+                &checker,
+                black_box(start),
+                &product,
+                &stops,
+                Load::FREE,
+            )
+            .expect("free");
+            commands += b.samples.len();
+            eat(&b.samples);
+        }
+    }
+    println!("{runs} runs, {commands} commands, digest {digest:016x}");
+}
