@@ -436,7 +436,10 @@ pub fn study(points: &[StudyPoint], title: &str, x_desc: &str) -> Result<String,
         };
         let x_label = move |v: &f64| {
             if !whole {
-                format!("{v}")
+                // At most three decimals, no trailing zeros (0.3, not
+                // 0.30000000000000004).
+                let text = format!("{v:.3}");
+                text.trim_end_matches('0').trim_end_matches('.').to_owned()
             } else if (v - v.round()).abs() < 1e-6 {
                 format!("{:.0}", v.round())
             } else {

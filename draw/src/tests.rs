@@ -330,7 +330,7 @@ fn a_study_has_one_line_per_series_and_a_bar_per_point() {
     ];
     let svg = study(&points, "Success against training ratio", "training ratio").expect("draws");
     let t = texts(&svg);
-    for name in ["m_case1_3of5", "m_case2_4of5", "training ratio"] {
+    for name in ["m_case1_3of5", "m_case2_4of5", "training ratio", "0.3"] {
         assert!(t.iter().any(|s| s == name), "{name} missing in {t:?}");
     }
     assert_eq!(svg.matches("<circle").count(), points.len());
