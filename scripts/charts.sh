@@ -2,15 +2,16 @@
 # Regenerates the pictures under docs/ that the README shows: the example
 # cell line2 with order deli_crate (orders/customers/hampton_deli.pack),
 # the scenario deli_mixed, the expert's executed tool path of deli_crate,
-# and the charts of a SMALL evaluation run (the bundled model and the
-# baselines on orders/suites/measure.pack, LIMIT scenarios per suite).
+# and the charts of an evaluation run (the bundled model and the
+# baselines on orders/suites/measure.pack, LIMIT scenarios per suite: all
+# 100 by default, about 7 minutes on 2 cores; LIMIT=5 for a quick look).
 # Every picture is deterministic but the charts' timings, which are
 # measured on this machine.
 #
 # Usage: scripts/charts.sh
 # Environment:
 #   PACKWRIGHT  the binary (default: target/release/packwright)
-#   LIMIT       scenarios per suite of the evaluation (default: 5)
+#   LIMIT       scenarios per suite of the evaluation (default: 100)
 #   DOCS        where the pictures go (default: docs)
 
 set -euo pipefail
@@ -20,7 +21,7 @@ if [ ! -x "$bin" ]; then
   echo "charts.sh: no binary at $bin (cargo build --release, or set PACKWRIGHT)" >&2
   exit 2
 fi
-limit=${LIMIT:-5}
+limit=${LIMIT:-100}
 docs=${DOCS:-docs}
 mkdir -p "$docs/eval"
 
