@@ -130,7 +130,7 @@ pub struct Load<'h> {
     pub ignore: Option<&'h str>,
     /// The share of the arm's speed the motion moves at: 1, but on the
     /// guarded descent onto a top face the cell's `descent`
-    /// ([`Load::guarded`]; [`blend_slowed`] says how a share in (0, 1)
+    /// ([`Load::guarded`]; [`blend_slowed`](crate::blend::blend_slowed) says how a share in (0, 1)
     /// slows a leg, and that any other value is full speed).
     pub speed: f64,
 }
@@ -815,7 +815,7 @@ const MIN_CAP: f64 = 0.2;
 /// [`checked_blend`] with a load per leg: `load_of(k)` for the leg ending
 /// at waypoint `k`; a sample is checked with its leg's load (in an
 /// overlap, the later leg's), and the leg moves at its load's speed
-/// ([`blend_slowed`]).
+/// ([`blend_slowed`](crate::blend::blend_slowed)).
 pub fn checked_blend_by<'h>(
     arm: &Arm,
     checker: &Checker,
@@ -880,7 +880,7 @@ pub fn checked_blend_by<'h>(
 /// tip, a held product's box [`HELD_PADDING`](packwright_kinematics::body::HELD_PADDING)
 /// = 3 mm beyond its faces; at 2 cm both are clear of the face by 15 mm
 /// or more, so the transition's commands, which are checked with nothing
-/// ignored ([`first_collision`]), can pass the check there.
+/// ignored ([`checked_blend`]), can pass the check there.
 pub const STOP_CLEARANCE: f64 = 0.02;
 
 /// Per leg, the shares of its way kept straight next to a stop it leaves
