@@ -322,13 +322,15 @@ fn the_executed_path_is_recorded_and_drawn() {
     assert_eq!(count(&svg, "subgoal"), 2 * subgoals.len());
     assert_eq!(report.subgoals.len(), 7 * 4);
     assert_eq!(subgoals.len(), report.subgoals.len());
-    // The path passes each within the blend's corner deviation.
+    // The path passes each within the blend's corner deviation: up to
+    // about 7 cm at the lift's top (an 18 cm lift left straight for its
+    // first 2 cm only, `execute::STOP_CLEARANCE`), under 5 cm elsewhere.
     for (marked, planned) in subgoals.iter().zip(&report.subgoals) {
         let off = (0..3)
             .map(|k| (marked[k] - planned[k]).powi(2))
             .sum::<f64>()
             .sqrt();
-        assert!(off < 0.05, "sub-goal {planned:?} passed {off} m away");
+        assert!(off < 0.08, "sub-goal {planned:?} passed {off} m away");
     }
     for e in &path.events {
         if matches!(

@@ -27,12 +27,17 @@
 //!   commanded exactly, at rest, on a control cycle; no transition passes
 //!   it.
 //! - **Straight next to every stop**: a leg that leaves or reaches a stop
-//!   (or the start, or the end) keeps at least [`MIN_STRAIGHT`] of its
-//!   time next to it on the straight segment (rest-to-rest profiles are
-//!   symmetric: half the time is half the way): the final straight descent
-//!   onto a top face or into a slot, and the first straight part of the
-//!   way back up, where the product being picked or just released is no
-//!   obstacle to the collision check.
+//!   (or the start, or the end) keeps a part of its way next to it on the
+//!   straight segment: at least [`MIN_STRAIGHT`] of its time
+//!   (rest-to-rest profiles are symmetric: half the time is half the
+//!   way), or, with [`blend_straight`], at least the share of its way the
+//!   caller gives per leg and end. The caller
+//!   ([`checked_blend`](crate::execute::checked_blend)) gives the share up
+//!   to where the cup tip is a clearance from the stop: the final straight
+//!   descent onto a top face or into a slot, the start of the lift, and
+//!   the first straight part of the way back up, where the product being
+//!   picked or just released is no obstacle to the cup's check (it checks
+//!   the transitions with that product as an obstacle).
 //! - **Transitions are disjoint**: each leg is left after it was joined, so
 //!   at most one transition is running at any instant.
 //! - The commands are what a caller checks for collisions and sends;
@@ -262,6 +267,39 @@ fn leg(
     })
 }
 
+/// The time on `leg` (its own) where it has covered `share` of its way,
+/// by its joint that moves most (the legs are phase-synchronised: every
+/// joint covers the same share at the same time): with `after`, the
+/// earliest time from which it has covered at least that share, else the
+/// latest time until which it has covered at most that share (within
+/// 1e-9 s, on the safe side either way).
+fn time_at_share(leg: &Leg, share: f64, after: bool) -> f64 {
+    if share <= 0.0 {
+        return 0.0;
+    }
+    if share >= 1.0 {
+        return leg.duration;
+    }
+    let (j, delta) = (0..DOF)
+        .map(|j| (j, leg.to[j] - leg.from[j]))
+        .max_by(|x, y| x.1.abs().total_cmp(&y.1.abs()))
+        .unwrap_or((0, 0.0));
+    if delta == 0.0 {
+        return if after { leg.duration } else { 0.0 };
+    }
+    let covered = |t: f64| (position(&leg.trajectory, t)[j] - leg.from[j]) / delta;
+    let (mut lo, mut hi) = (0.0, leg.duration);
+    while hi - lo > 1e-9 {
+        let mid = 0.5 * (lo + hi);
+        if covered(mid) < share {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    if after { hi } else { lo }
+}
+
 /// The times at which a trajectory's jerk changes: its profiles' phase
 /// boundaries, for every joint.
 fn breakpoints(trajectory: &Trajectory<DOF>, into: &mut Vec<f64>) {
@@ -430,13 +468,35 @@ pub fn slowed(limits: &[Limits; DOF], share: f64) -> [Limits; DOF] {
 /// value, is full speed). The transitions keep `limits`: a slowed leg is
 /// on its straight segment, at its own speed, wherever no transition
 /// shapes it; next to a stop that is at least [`MIN_STRAIGHT`] of its
-/// time (a guarded descent onto a top face).
+/// time (a guarded descent onto a top face; [`blend_straight`] can give
+/// another share).
 pub fn blend_slowed(
     limits: [Limits; DOF],
     start: Joints,
     waypoints: &[Joints],
     caps: &[f64],
     speeds: &[f64],
+) -> Result<Blended, SmoothingError> {
+    blend_straight(limits, start, waypoints, caps, speeds, &[])
+}
+
+/// [`blend_slowed`] with the straight part next to each stop given per
+/// leg: `straight[k] = Some([leaving, reaching])` keeps leg `k` on its
+/// straight segment over at least that share of its *way* (the joint
+/// segment) next to the stop it leaves and next to the stop it reaches
+/// (each clamped to `[0, 1]`; 1 keeps the whole leg straight on that
+/// side). `None`, or a missing entry, keeps [`MIN_STRAIGHT`] of its time
+/// at both ends, as [`blend_slowed`] does. The legs are
+/// phase-synchronised, so a share of the way is where every joint has
+/// covered that share of its move (measured on the joint moving most,
+/// rounded to the safe side).
+pub fn blend_straight(
+    limits: [Limits; DOF],
+    start: Joints,
+    waypoints: &[Joints],
+    caps: &[f64],
+    speeds: &[f64],
+    straight: &[Option<[f64; 2]>],
 ) -> Result<Blended, SmoothingError> {
     let (mut otg, mut input) = ruckig_input(&limits, start)?;
     for (i, w) in waypoints.iter().enumerate() {
@@ -470,14 +530,20 @@ pub fn blend_slowed(
         let (a, b) = (&legs[k], &legs[k + 1]);
         let leaves_stop = k == 0 || stop_at(k - 1);
         let earliest = if leaves_stop {
-            joined.max(MIN_STRAIGHT * a.duration)
+            joined.max(match straight.get(k).copied().flatten() {
+                None => MIN_STRAIGHT * a.duration,
+                Some(s) => time_at_share(a, s[0].clamp(0.0, 1.0), true),
+            })
         } else {
             joined
         };
         // A leg reaching a stop keeps its end straight; one passing
         // through keeps its second half for the next corner.
         let latest = if stop_at(k + 1) {
-            (1.0 - MIN_STRAIGHT) * b.duration
+            match straight.get(k + 1).copied().flatten() {
+                None => (1.0 - MIN_STRAIGHT) * b.duration,
+                Some(s) => time_at_share(b, 1.0 - s[1].clamp(0.0, 1.0), false),
+            }
         } else {
             0.5 * b.duration
         };

@@ -3,7 +3,7 @@
 //! stopping everywhere is what `smooth_path` commands.
 
 use packwright_kinematics::{Arm, DOF, Joints, Limits};
-use packwright_motion::blend::{blend, blend_capped, blend_slowed, slowed};
+use packwright_motion::blend::{blend, blend_capped, blend_slowed, blend_straight, slowed};
 use packwright_motion::smoothing::{CONTROL_PERIOD, smooth_path};
 use proptest::prelude::*;
 
@@ -236,5 +236,98 @@ fn a_slowed_leg_keeps_its_path_at_its_own_speed() {
     for speeds in [&[][..], &[1.0, 1.0], &[0.0, 2.0]] {
         let same = blend_slowed(limits, START, &waypoints, &[], speeds).expect("blends");
         assert_eq!(same, full);
+    }
+}
+
+/// Where `q` is on the joint segment from `a` to `b`: the share of the
+/// way (by the joint moving most) when it lies on it (1e-9 rad), else
+/// `None`.
+/// How far `q` is along the leg from `a` to `b`: the share of the way of
+/// the joint moving most.
+fn along(a: &Joints, b: &Joints, q: &Joints) -> f64 {
+    let d = (0..DOF)
+        .max_by(|&x, &y| (b[x] - a[x]).abs().total_cmp(&(b[y] - a[y]).abs()))
+        .unwrap();
+    (q[d] - a[d]) / (b[d] - a[d])
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 1000, ..ProptestConfig::default() })]
+
+    /// `blend_straight` with random shares per leg and end: the contract
+    /// (limits, stops exact, never slower than stopping everywhere), and
+    /// next to each stop (the start and the last waypoint too) no
+    /// transition shapes the commands (they are the leg's own, on its
+    /// straight segment when Ruckig could phase-synchronise it) over at
+    /// least the share of its way given for that end (to within the few
+    /// commands' margin of a corner's `samples`).
+    #[test]
+    fn blended_motion_keeps_the_straight_share_it_is_given(
+        waypoints in prop::collection::vec(joints(), 1..6),
+        stops in prop::collection::vec(any::<bool>(), 6),
+        shares in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0, any::<bool>()), 6),
+        scale in 0.01f64..1.0,
+    ) {
+        let waypoints: Vec<Joints> = waypoints
+            .iter()
+            .map(|w| std::array::from_fn(|j| START[j] + scale * (w[j] - START[j])))
+            .collect();
+        let limits = ur10();
+        let n = waypoints.len();
+        let straight: Vec<Option<[f64; 2]>> = shares
+            .iter()
+            .map(|&(a, b, given)| given.then_some([a, b]))
+            .collect();
+        let caps = packwright_motion::blend::full_caps(n, &stops);
+        let blended = blend_straight(limits, START, &waypoints, &caps, &[], &straight).unwrap();
+        let stopped = blend(limits, START, &waypoints, &[true; 6]).unwrap();
+        check_limits(&limits, START, &blended.samples);
+        prop_assert_eq!(blended.samples.last(), waypoints.last());
+        prop_assert!(blended.samples.len() <= stopped.samples.len());
+        let is_stop = |k: usize| k + 1 == n || stops[k];
+        let from = |k: usize| if k == 0 { START } else { waypoints[k - 1] };
+        // The least share of each end's way kept straight.
+        let wanted = |k: usize, end: usize| match straight[k] {
+            Some(s) => s[end],
+            None => packwright_motion::blend::MIN_STRAIGHT,
+        };
+        for (k, &b) in waypoints.iter().enumerate() {
+            let a = from(k);
+            let delta = (0..DOF).map(|j| (b[j] - a[j]).abs()).fold(0.0, f64::max);
+            if delta < 1e-6 {
+                continue;
+            }
+            // One command's progress at most, on this leg.
+            let step = (0..DOF)
+                .filter(|&j| (b[j] - a[j]).abs() > 0.0)
+                .map(|j| limits[j].velocity * CONTROL_PERIOD / (b[j] - a[j]).abs())
+                .fold(0.0, f64::max);
+            // A corner's samples reach two commands past its transition.
+            let step = (3.0 * step).min(1.0) * 1.01 + 1e-9;
+            if is_stop(k) {
+                // Backwards from the command at the stop.
+                let at = blended.at[k];
+                let mut reach = 1.0;
+                for i in (0..=at).rev() {
+                    if blended.shaped(i) || blended.leg_at(i) != k {
+                        break;
+                    }
+                    reach = along(&a, &b, &blended.samples[i]);
+                }
+                prop_assert!(1.0 - reach >= wanted(k, 1) - step, "leg {} reaches its stop straight over {} of its way, wanted {}", k, 1.0 - reach, wanted(k, 1));
+            }
+            if k == 0 || is_stop(k - 1) {
+                // Forwards from the command at the stop it leaves.
+                let at = if k == 0 { 0 } else { blended.at[k - 1] + 1 };
+                let mut reach = 0.0;
+                for i in at..blended.samples.len() {
+                    if blended.shaped(i) || blended.leg_at(i) != k {
+                        break;
+                    }
+                    reach = along(&a, &b, &blended.samples[i]);
+                }
+                prop_assert!(reach >= wanted(k, 0) - step, "leg {} leaves its stop straight over {} of its way, wanted {}", k, reach, wanted(k, 0));
+            }
+        }
     }
 }

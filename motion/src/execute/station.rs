@@ -8,7 +8,7 @@
 //! Invariant: nothing reaches the world that [`checked_blend`] did not
 //! return.
 
-use crate::blend::{Blended, blend_slowed};
+use crate::blend::{Blended, blend_straight};
 use crate::collision::{Checker, Held, MAX_STEP, ProductBody};
 use crate::expert::{SubGoal, Suction};
 use crate::rrt::{self, Query, RrtConfig};
@@ -130,7 +130,7 @@ pub struct Load<'h> {
     pub ignore: Option<&'h str>,
     /// The share of the arm's speed the motion moves at: 1, but on the
     /// guarded descent onto a top face the cell's `descent`
-    /// ([`Load::guarded`]; [`blend_slowed`] says how a share in (0, 1)
+    /// ([`Load::guarded`]; [`blend_slowed`](crate::blend::blend_slowed) says how a share in (0, 1)
     /// slows a leg, and that any other value is full speed).
     pub speed: f64,
 }
@@ -789,7 +789,11 @@ pub fn checked_samples(
 /// The blended 2 ms commands from `start` through `waypoints`, stopping
 /// where `stops` says (and at the last), each checked for collision (the
 /// straight joint segment from the last checked sample, at most 1 degree
-/// on). A corner whose blended commands would collide gets a smaller
+/// on). The product a load ignores (the cup touching its top face) is
+/// ignored only on the straight segments: a transition's commands are
+/// checked with it as an obstacle. Each leg keeps straight next to a stop
+/// until the cup tip is [`STOP_CLEARANCE`] from it (a slowed leg: half its
+/// time). A corner whose blended commands would collide gets a smaller
 /// transition, then becomes a stop, and the motion is blended again, so
 /// the commands are never less safe than stopping at every waypoint: when
 /// that collides too, this is the collision.
@@ -811,7 +815,7 @@ const MIN_CAP: f64 = 0.2;
 /// [`checked_blend`] with a load per leg: `load_of(k)` for the leg ending
 /// at waypoint `k`; a sample is checked with its leg's load (in an
 /// overlap, the later leg's), and the leg moves at its load's speed
-/// ([`blend_slowed`]).
+/// ([`blend_slowed`](crate::blend::blend_slowed)).
 pub fn checked_blend_by<'h>(
     arm: &Arm,
     checker: &Checker,
@@ -835,8 +839,9 @@ pub fn checked_blend_by<'h>(
     let mut previous: Option<(Blended, Checked)> = None;
     // Each leg's speed: its load's (the guarded descent is slowed).
     let speeds: Vec<f64> = (0..waypoints.len()).map(|k| load_of(k).speed).collect();
+    let straight = straight_shares(checker, start, waypoints, &speeds);
     loop {
-        let motion = blend_slowed(arm.limits, start, waypoints, &caps, &speeds)
+        let motion = blend_straight(arm.limits, start, waypoints, &caps, &speeds, &straight)
             .map_err(|e| Unchecked::Smoothing(e.to_string()))?;
         // A capped corner changes the samples from its transition on
         // only: those before it passed in the round before.
@@ -865,6 +870,62 @@ pub fn checked_blend_by<'h>(
     }
 }
 
+/// How far from a stop's tip position (m) a leg next to it keeps to its
+/// straight joint segment ([`blend_straight`]), when the leg is long
+/// enough. Next to a stop the cup touches a top face (the product picked,
+/// or just released, which the leg's check ignores for the cup) or a held
+/// product touches its support or nearly the box floor. The padded cup
+/// reaches [`PADDING`](packwright_kinematics::body::PADDING) −
+/// [`CUP_SHORT`](packwright_kinematics::body::CUP_SHORT) = 5 mm below the
+/// tip, a held product's box [`HELD_PADDING`](packwright_kinematics::body::HELD_PADDING)
+/// = 3 mm beyond its faces; at 2 cm both are clear of the face by 15 mm
+/// or more, so the transition's commands, which are checked with nothing
+/// ignored ([`checked_blend`]), can pass the check there.
+pub const STOP_CLEARANCE: f64 = 0.02;
+
+/// Per leg, the shares of its way kept straight next to a stop it leaves
+/// and one it reaches ([`blend_straight`]): up to where the cup tip is
+/// [`STOP_CLEARANCE`] from its position at that end (the whole leg when
+/// it never gets that far). A slowed leg (the guarded descent onto a top
+/// face) keeps [`MIN_STRAIGHT`](crate::blend::MIN_STRAIGHT) of its time
+/// (`None`): the cell asked for that descent at its own speed.
+fn straight_shares(
+    checker: &Checker,
+    start: Joints,
+    waypoints: &[Joints],
+    speeds: &[f64],
+) -> Vec<Option<[f64; 2]>> {
+    let tip = |q: &Joints| checker.arm().tool_tip(checker.base(), q, checker.suction());
+    // The least share of the way from `stop` to `other` beyond which the
+    // tip is STOP_CLEARANCE or more from the tip at `stop`, on a grid of
+    // SHARES steps (rounded up: the next grid point after the last one
+    // nearer).
+    const SHARES: usize = 64;
+    let share = |stop: &Joints, other: &Joints| -> f64 {
+        let at = tip(stop);
+        let last_near = (1..=SHARES)
+            .filter(|&i| {
+                let s = i as f64 / SHARES as f64;
+                let q: Joints = std::array::from_fn(|j| stop[j] + s * (other[j] - stop[j]));
+                (tip(&q) - at).norm() < STOP_CLEARANCE
+            })
+            .max()
+            .unwrap_or(0);
+        ((last_near + 1) as f64 / SHARES as f64).min(1.0)
+    };
+    let mut from = start;
+    waypoints
+        .iter()
+        .zip(speeds)
+        .map(|(to, speed)| {
+            let slowed = *speed > 0.0 && *speed < 1.0;
+            let shares = (!slowed).then(|| [share(&from, to), share(to, &from)]);
+            from = *to;
+            shares
+        })
+        .collect()
+}
+
 /// How far a check of a motion got: its samples before `from` passed,
 /// the last of them checked being `last` (the start when none was).
 #[derive(Debug, Clone, Copy)]
@@ -884,7 +945,10 @@ fn span(a: &Joints, b: &Joints) -> f64 {
 /// The first of `motion`'s samples whose configuration collides, checking
 /// from `done` on; `done` is left at how far the check got before it.
 ///
-/// Which samples are checked (each with its leg's load): the last one,
+/// Which samples are checked (each with its leg's load, but that a sample
+/// a transition shaped ([`Blended::shaped`]) ignores no product: the load's
+/// ignored product is no obstacle on the straight segment next to its
+/// stop only): the last one,
 /// the last of each leg, and otherwise a sample when the next one is
 /// [`MAX_STEP`] or more (in some joint) from the last checked one. So
 /// consecutive checked configurations are less than [`MAX_STEP`] apart in
@@ -914,10 +978,13 @@ fn first_collision<'h>(
             continue;
         }
         let load = load_of(leg);
+        // The product a leg ignores is ignored on its straight segment
+        // only: a transition's commands must keep the cup off it too.
+        let ignore = if motion.shaped(i) { None } else { load.ignore };
         let hit = if span(q, &done.last) >= MAX_STEP {
-            checker.check_motion(&done.last, q, load.held, load.ignore)
+            checker.check_motion(&done.last, q, load.held, ignore)
         } else {
-            checker.check(q, load.held, load.ignore)
+            checker.check(q, load.held, ignore)
         };
         if let Some(hit) = hit {
             return Some((i, hit));

@@ -102,3 +102,75 @@ fn settle_times_are_whole_control_cycles() {
     assert_eq!(settle_cycles(f64::NAN, 0.002), 0);
     assert_eq!(settle_cycles(0.1, 0.0), 0);
 }
+
+/// A product's pick, carry and release on the bench cell, blended through
+/// the corners with the loads `send_legs` gives (the product ignored on
+/// the way down onto it and back up from the slot, held in between): the
+/// commands a transition shaped are free with nothing ignored, and next
+/// to each stop the cup tip moves [`STOP_CLEARANCE`] on the straight
+/// segment before any transition shapes the commands.
+#[test]
+fn transitions_ignore_nothing_and_stops_keep_their_clearance() {
+    let arm = Arm::ur10();
+    let cell = common::bench_cell();
+    let mut checker = Checker::new(&arm, &cell);
+    let size = [0.05; 3];
+    checker.set_products(&[
+        ProductBody {
+            name: "P".into(),
+            centre: [0.62, -0.2, 0.025],
+            size,
+            yaw: 0.0,
+        },
+        ProductBody {
+            name: "Q".into(),
+            centre: [0.74, -0.2, 0.025],
+            size,
+            yaw: 0.0,
+        },
+    ]);
+    let ready = READY;
+    let at = |x: f64, y: f64, z: f64| {
+        reach(&checker, Point3::new(x, y, z), 0.0, &ready, Load::FREE).expect("reachable")
+    };
+    let start = at(0.5, -0.2, 0.3);
+    let waypoints = [
+        at(0.62, -0.2, 0.15),
+        at(0.62, -0.2, 0.05),
+        at(0.62, -0.2, 0.15),
+        at(0.35, 0.25, 0.25),
+        at(0.0, 0.6, 0.15),
+        at(0.0, 0.6, 0.08),
+        at(0.0, 0.6, 0.15),
+    ];
+    let stops = [false, true, false, false, false, true, false];
+    let held = Held::under_cup("P", size, cell.suction, nalgebra::Vector3::zeros());
+    let lifting = held.clone().leaving_support();
+    let load_of = |k: usize| match k {
+        0 | 1 | 6 => Load::ignoring("P"),
+        2 => Load::holding(&lifting),
+        _ => Load::holding(&held),
+    };
+    let b = checked_blend_by(&arm, &checker, start, &waypoints, &stops, load_of).expect("free");
+    assert!(b.corners.iter().filter(|c| c.saved > 0.0).count() >= 3);
+    let tip = |q: &Joints| arm.tool_tip(checker.base(), q, checker.suction());
+    for (i, q) in b.samples.iter().enumerate() {
+        if b.shaped(i) {
+            let load = load_of(b.leg_at(i));
+            assert_eq!(checker.check(q, load.held, None), None, "sample {i}");
+            // No shaped command within the clearance of a stop, but for
+            // the two commands a corner's samples reach past its
+            // transition: the tip's moves over the three commands after.
+            let moves: f64 = (i..(i + 3).min(b.samples.len() - 1))
+                .map(|n| (tip(&b.samples[n + 1]) - tip(&b.samples[n])).norm())
+                .sum();
+            for (k, w) in waypoints.iter().enumerate().filter(|(k, _)| stops[*k]) {
+                let d = (tip(q) - tip(w)).norm();
+                assert!(
+                    d + moves >= STOP_CLEARANCE,
+                    "sample {i}: {d} m from stop {k}"
+                );
+            }
+        }
+    }
+}
