@@ -84,6 +84,26 @@ pub struct Held {
 pub const LIFT_CLEARANCE: f64 = 0.0005;
 
 impl Held {
+    /// The box the checker tests for this product hanging from `flange`
+    /// (its pose and shape), grown by `pad`. Leaving its support, the box
+    /// keeps its margin above but ends [`LIFT_CLEARANCE`] short of the
+    /// bottom (the product's +z is the flange's, pointing down).
+    fn padded_box(&self, flange: &Isometry3<f64>, pad: f64) -> (Pose, SharedShape) {
+        let (half_z, shift) = if self.leaving_support {
+            let cut = pad + LIFT_CLEARANCE;
+            (self.size[2] / 2.0 + pad - cut / 2.0, -cut / 2.0)
+        } else {
+            (self.size[2] / 2.0 + pad, 0.0)
+        };
+        let at = pose(&(flange * self.in_flange * Isometry3::translation(0.0, 0.0, shift)));
+        let cuboid = SharedShape::new(Cuboid::new(Vector::new(
+            (self.size[0] / 2.0 + pad) as f32,
+            (self.size[1] / 2.0 + pad) as f32,
+            half_z as f32,
+        )));
+        (at, cuboid)
+    }
+
     /// A product of `size` held by its top face under a cup `suction` long,
     /// its centre `beside` the cup's axis (flange frame, m; zero when the
     /// cup met the face at its centre), half its height below the tip.
@@ -304,22 +324,7 @@ impl Checker {
             // The flange from the same links (the same arithmetic as
             // `Arm::flange_pose`).
             let flange = links[DOF] * self.arm.flange;
-            let pad = self.held_padding;
-            // Leaving its support, the box keeps its margin above but ends
-            // LIFT_CLEARANCE short of the bottom (the product's +z is the
-            // flange's, pointing down).
-            let (half_z, shift) = if h.leaving_support {
-                let cut = pad + LIFT_CLEARANCE;
-                (h.size[2] / 2.0 + pad - cut / 2.0, -cut / 2.0)
-            } else {
-                (h.size[2] / 2.0 + pad, 0.0)
-            };
-            let hp = pose(&(flange * h.in_flange * Isometry3::translation(0.0, 0.0, shift)));
-            let cuboid = SharedShape::new(Cuboid::new(Vector::new(
-                (h.size[0] / 2.0 + pad) as f32,
-                (h.size[1] / 2.0 + pad) as f32,
-                half_z as f32,
-            )));
+            let (hp, cuboid) = h.padded_box(&flange, self.held_padding);
             let aabb = cuboid.compute_aabb(&hp);
             let name = Body::Held(h.name.clone());
             let obstacles = self.statics.iter().chain(&self.products);
@@ -448,19 +453,7 @@ mod tests {
         }
         if let Some(h) = held {
             let flange = c.arm.flange_pose(&c.base, q);
-            let pad = c.held_padding;
-            let (half_z, shift) = if h.leaving_support {
-                let cut = pad + LIFT_CLEARANCE;
-                (h.size[2] / 2.0 + pad - cut / 2.0, -cut / 2.0)
-            } else {
-                (h.size[2] / 2.0 + pad, 0.0)
-            };
-            let hp = pose(&(flange * h.in_flange * Isometry3::translation(0.0, 0.0, shift)));
-            let cuboid = SharedShape::new(Cuboid::new(Vector::new(
-                (h.size[0] / 2.0 + pad) as f32,
-                (h.size[1] / 2.0 + pad) as f32,
-                half_z as f32,
-            )));
+            let (hp, cuboid) = h.padded_box(&flange, c.held_padding);
             let aabb = cuboid.compute_aabb(&hp);
             let name = Body::Held(h.name.clone());
             for o in obstacles(true) {
