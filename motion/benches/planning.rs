@@ -6,7 +6,7 @@
 
 #[path = "../tests/common/mod.rs"]
 mod common;
-use common::bench_cell;
+use common::{bench_cell, product_motion};
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Point3;
@@ -89,17 +89,10 @@ fn bench(c: &mut Criterion) {
     // above the slot, release, back up), stopping only at the contact and
     // the release: the legs, the overlaps, the samples, and with their
     // collision checks.
-    let product = [
-        at(0.62, -0.2, 0.15),
-        at(0.62, -0.2, 0.05),
-        at(0.62, -0.2, 0.15),
-        at(0.35, 0.25, 0.25),
-        at(0.0, 0.6, 0.15),
-        at(0.0, 0.6, 0.08),
-        at(0.0, 0.6, 0.15),
-    ];
-    let stops = [false, true, false, false, false, true, false];
-    let start = at(0.5, -0.2, 0.3);
+    let product = product_motion::SUBGOALS.map(|[x, y, z]| at(x, y, z));
+    let stops = product_motion::STOPS;
+    let [x, y, z] = product_motion::START;
+    let start = at(x, y, z);
     c.bench_function("blend a product's 7 sub-goals", |b| {
         b.iter(|| blend(arm.limits, black_box(start), &product, &stops))
     });

@@ -10,7 +10,7 @@
 
 #[path = "../tests/common/mod.rs"]
 mod common;
-use common::bench_cell;
+use common::{bench_cell, product_motion};
 
 use nalgebra::Point3;
 use packwright_kinematics::Arm;
@@ -48,17 +48,10 @@ fn main() {
     let at = |x: f64, y: f64, z: f64| {
         reach(&checker, Point3::new(x, y, z), 0.0, &ready, Load::FREE).expect("reachable")
     };
-    let product = [
-        at(0.62, -0.2, 0.15),
-        at(0.62, -0.2, 0.05),
-        at(0.62, -0.2, 0.15),
-        at(0.35, 0.25, 0.25),
-        at(0.0, 0.6, 0.15),
-        at(0.0, 0.6, 0.08),
-        at(0.0, 0.6, 0.15),
-    ];
-    let stops = [false, true, false, false, false, true, false];
-    let start = at(0.5, -0.2, 0.3);
+    let product = product_motion::SUBGOALS.map(|[x, y, z]| at(x, y, z));
+    let stops = product_motion::STOPS;
+    let [x, y, z] = product_motion::START;
+    let start = at(x, y, z);
     let mut commands = 0;
     // A digest of the commands' bits (FNV-1a), to compare builds.
     let mut digest: u64 = 0xcbf2_9ce4_8422_2325;

@@ -133,17 +133,10 @@ fn transitions_ignore_nothing_and_stops_keep_their_clearance() {
     let at = |x: f64, y: f64, z: f64| {
         reach(&checker, Point3::new(x, y, z), 0.0, &ready, Load::FREE).expect("reachable")
     };
-    let start = at(0.5, -0.2, 0.3);
-    let waypoints = [
-        at(0.62, -0.2, 0.15),
-        at(0.62, -0.2, 0.05),
-        at(0.62, -0.2, 0.15),
-        at(0.35, 0.25, 0.25),
-        at(0.0, 0.6, 0.15),
-        at(0.0, 0.6, 0.08),
-        at(0.0, 0.6, 0.15),
-    ];
-    let stops = [false, true, false, false, false, true, false];
+    let [x, y, z] = common::product_motion::START;
+    let start = at(x, y, z);
+    let waypoints = common::product_motion::SUBGOALS.map(|[x, y, z]| at(x, y, z));
+    let stops = common::product_motion::STOPS;
     let held = Held::under_cup("P", size, cell.suction, nalgebra::Vector3::zeros());
     let lifting = held.clone().leaving_support();
     let load_of = |k: usize| match k {

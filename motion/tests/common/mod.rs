@@ -34,3 +34,23 @@ pub fn bench_cell() -> CellScene {
         ],
     }
 }
+
+/// One product's motion on the bench cell, in tool positions (x, y, z):
+/// from above the pending area, its seven sub-goals (hover, top face,
+/// lift, approach, above the slot, release, back up), stopping only at
+/// the contact and the release. The bench, the callgrind example and the
+/// station's tests blend it.
+#[allow(dead_code)] // not every file that includes this module blends it
+pub mod product_motion {
+    pub const START: [f64; 3] = [0.5, -0.2, 0.3];
+    pub const SUBGOALS: [[f64; 3]; 7] = [
+        [0.62, -0.2, 0.15],
+        [0.62, -0.2, 0.05],
+        [0.62, -0.2, 0.15],
+        [0.35, 0.25, 0.25],
+        [0.0, 0.6, 0.15],
+        [0.0, 0.6, 0.08],
+        [0.0, 0.6, 0.15],
+    ];
+    pub const STOPS: [bool; 7] = [false, true, false, false, false, true, false];
+}
