@@ -29,6 +29,12 @@ fn settings(fake: &FakeController) -> Settings {
     // Half a second of silence before a stall (50 ms on a robot), so that
     // a loaded test machine does not look like a stalled link.
     s.stall_periods = 250;
+    // For the same reason the controller's watchdog allows half a second
+    // without a fed register (50 ms by default): a driver thread starved
+    // by other tests on 2 cores tripped it once in CI-like runs
+    // (`a_program_already_playing_is_not_replaced`). The watchdog tests
+    // still see it trip (they wait up to 5 s).
+    s.watchdog_hz = 2.0;
     s
 }
 
