@@ -457,4 +457,21 @@ pub struct GenerateArgs {
     /// names are replaced).
     #[arg(short, long, value_name = "DIR")]
     pub output: PathBuf,
+    /// Teach every cell in this order instead of the seed's own (the rest
+    /// of each cell stays the seed's): cells that teach one model together
+    /// must agree on the order, since `train` infers one rule from all its
+    /// demonstrations.
+    #[arg(long, value_enum, value_name = "RULE")]
+    pub sequence: Option<TaughtOrder>,
+}
+
+/// A sequence rule `generate` can teach (`--sequence`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum TaughtOrder {
+    /// Inventory order.
+    Ascending,
+    /// Inventory order reversed.
+    Descending,
+    /// A priority list other than the inventory order.
+    Listed,
 }

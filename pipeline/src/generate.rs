@@ -99,6 +99,10 @@ impl Side {
     }
 }
 
+/// Mixed into the seed for a priority list drawn for a listed order that
+/// the seed did not draw itself ([`family_cell_taught`]).
+const LISTED_STREAM: u64 = 0x6c69_7374_6564;
+
 /// The taught sequence rule (`sequence` of the `demos` block).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -557,6 +561,15 @@ fn layout_is_valid(l: &Layout, base: [i64; 2], products: &[Product], product_rea
 
 /// The cell generated from `seed`: see the module documentation.
 pub fn family_cell(seed: u64) -> Generated {
+    family_cell_taught(seed, None)
+}
+
+/// The cell generated from `seed`, taught in the order `rule` when given
+/// (else the seed's own): the same cell, products and suites; the
+/// teaching is the same block in that order. Cells that teach one model
+/// together must agree on the rule (`train` infers one rule from all its
+/// demonstrations).
+pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let name = cell_name(seed);
 
@@ -640,16 +653,27 @@ pub fn family_cell(seed: u64) -> Generated {
         .iter()
         .map(|&i| slot_names[i].clone())
         .collect();
-    let sequence = *[Sequence::Ascending, Sequence::Descending, Sequence::Listed]
+    let drawn = *[Sequence::Ascending, Sequence::Descending, Sequence::Listed]
         .choose(&mut rng)
         .expect("three rules");
     let product_names: Vec<String> = products.iter().map(|p| p.name.clone()).collect();
     let mut priority = product_names.clone();
-    if sequence == Sequence::Listed {
+    if drawn == Sequence::Listed {
         // A priority list that is not the inventory order.
         while priority == product_names {
             priority.shuffle(&mut rng);
         }
+    }
+    let sequence = rule.unwrap_or(drawn);
+    if sequence == Sequence::Listed && priority == product_names {
+        // A listed order asked of a seed that drew another rule: its own
+        // draws, so that the rest of the cell stays the seed's.
+        let mut own = ChaCha8Rng::seed_from_u64(seed ^ LISTED_STREAM);
+        while priority == product_names {
+            priority.shuffle(&mut own);
+        }
+    } else if sequence != Sequence::Listed {
+        priority = product_names.clone();
     }
     let demos_seed = rng.random_range(1..=9999u64);
 
@@ -908,5 +932,34 @@ mod tests {
             assert!(g.untaught_slots.len() == 1 || g.untaught_slots.len() == 2);
         }
         assert_ne!(family_cell(1).text, family_cell(2).text);
+    }
+
+    #[test]
+    fn a_cell_taught_in_another_order_is_the_same_cell() {
+        for seed in 0..12 {
+            let own = family_cell(seed);
+            assert_eq!(family_cell_taught(seed, None), own);
+            for rule in [Sequence::Ascending, Sequence::Descending, Sequence::Listed] {
+                let g = family_cell_taught(seed, Some(rule));
+                assert_eq!(g.sequence, rule, "seed {seed}");
+                assert_eq!(g.demonstrations, own.demonstrations, "seed {seed}");
+                assert_eq!(g.suites, own.suites, "seed {seed}");
+                assert_eq!(
+                    g.priority != g.products,
+                    rule == Sequence::Listed,
+                    "seed {seed}: a listed order is not the inventory order, and only it"
+                );
+                let before =
+                    |text: &str| text.split("\n# Sparse teaching").next().map(str::to_owned);
+                assert_eq!(before(&g.text), before(&own.text), "seed {seed}");
+                let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
+                let checked = check(
+                    &loader,
+                    &[PathBuf::from(g.file_name())],
+                    &crate::reach::RobotWorkspace::new(),
+                );
+                assert!(checked.is_ok(), "seed {seed}, {rule:?}");
+            }
+        }
     }
 }

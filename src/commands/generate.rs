@@ -2,10 +2,10 @@
 //! generator is `packwright_pipeline::generate`; this is the file edge).
 
 use crate::Exit;
-use crate::cli::GenerateArgs;
+use crate::cli::{GenerateArgs, TaughtOrder};
 use crate::fsio::write_file_atomically;
 use anyhow::{Context, bail};
-use packwright_pipeline::generate::family_cell;
+use packwright_pipeline::generate::{Sequence, family_cell_taught};
 use std::fs;
 
 pub fn run(args: &GenerateArgs) -> anyhow::Result<Exit> {
@@ -24,8 +24,13 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<Exit> {
     }
     fs::create_dir_all(&args.output)
         .with_context(|| format!("cannot create {}", args.output.display()))?;
+    let rule = args.sequence.map(|r| match r {
+        TaughtOrder::Ascending => Sequence::Ascending,
+        TaughtOrder::Descending => Sequence::Descending,
+        TaughtOrder::Listed => Sequence::Listed,
+    });
     for seed in args.seed..=last {
-        let generated = family_cell(seed);
+        let generated = family_cell_taught(seed, rule);
         let path = args.output.join(generated.file_name());
         write_file_atomically(&path, generated.text.as_bytes())?;
         outln!("{}", path.display());
