@@ -227,12 +227,14 @@ pub struct ExecuteArgs {
     /// `rrt` (the same sub-goals joined by RRT-Connect, the baseline) or
     /// `learned` (the reasoner chooses, the sub-goal planner and the
     /// dynamics policy move; RRT-Connect when a motion would collide or
-    /// fall short). Default: `learned` when `--model` is given or the
-    /// bundled model was trained on the order's cell, else `expert`.
+    /// fall short). Default: `learned`, with `--model` or else the bundled
+    /// model, on any cell (a note on stderr says when the model was not
+    /// taught the order's cell).
     #[arg(long, value_name = "PLANNER", value_parser = planner)]
     pub planner: Option<PlannerKind>,
     /// A model directory written by `packwright train` (default: the
-    /// bundled model, trained on `orders/`).
+    /// bundled model, trained on line2 and 16 generated cells by
+    /// scripts/train-default.sh).
     #[arg(long, value_name = "MODEL_DIR")]
     pub model: Option<PathBuf>,
     /// Seed of the RRT-Connect planner.
@@ -303,8 +305,10 @@ pub struct TrainArgs {
     /// The model directory to write (replaced atomically).
     #[arg(short, long, value_name = "MODEL_DIR")]
     pub output: PathBuf,
-    /// Learn from these `demo`/`demos` blocks only (default: all of them;
-    /// they must be in one cell).
+    /// Learn from these `demo`/`demos` blocks only (default: all of them).
+    /// They may be in several cells: one model then serves all of them and
+    /// others like them (the bundled model learns from 17 cells); `train`
+    /// infers one sequence rule from all of them.
     #[arg(long = "demos", value_name = "NAME", num_args = 1..)]
     pub demos: Vec<String>,
     /// Seed of the initial weights, the split and the batches.

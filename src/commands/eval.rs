@@ -89,7 +89,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
             continue;
         };
         let cell = cell_of(&compiled, &first.setup);
-        let learned = choose_planner(Some(PlannerKind::Learned), args.model.as_deref(), &cell);
+        let learned = choose_planner(Some(PlannerKind::Learned), args.model.as_deref());
         let nets = match learned {
             Ok((_, nets)) => nets,
             Err(e) => {

@@ -81,14 +81,14 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
     if args.dry_run && address.is_none() {
         anyhow::bail!("--dry-run needs a real robot: --robot ur10://HOST");
     }
-    let (kind, model) = choose_planner(args.planner, args.model.as_deref(), &ep.task.cell.name)?;
+    let (kind, model) = choose_planner(args.planner, args.model.as_deref())?;
     if let Some(nets) = &model
         && !taught(nets, &ep.task.cell.name)
     {
         errln!(
-            "note: the model was taught cell(s) {}, not `{}`: it answers from this cell's geometry (see README, \"Learning\")",
-            nets.task.cells.join(", "),
-            ep.task.cell.name
+            "note: the model was not taught cell `{}` ({}): it answers from this cell's geometry (see README, \"Learning\")",
+            ep.task.cell.name,
+            taught_cells(&nets.task.cells)
         );
     }
     // With --record, the policy's decisions are journalled too.
@@ -319,5 +319,20 @@ fn print_report(name: &str, report: &Report, clock: &str) {
         for v in &report.violations {
             outln!("  the reasoner {v}: the arm stopped");
         }
+    }
+}
+
+/// The cells a model was taught, for a note: all of them when few, else
+/// the first three and how many more.
+fn taught_cells(cells: &[String]) -> String {
+    match cells {
+        [one] => format!("it was taught `{one}`"),
+        _ if cells.len() <= 4 => format!("it was taught {}", cells.join(", ")),
+        _ => format!(
+            "it was taught {} cells: {} and {} more",
+            cells.len(),
+            cells[..3].join(", "),
+            cells.len() - 3
+        ),
     }
 }
