@@ -233,6 +233,10 @@ pub enum Shortfall {
     Smoothing { reason: String },
     /// The motion would collide.
     Collides { hit: Hit },
+    /// The learned sub-goal where the suction switches lies this far (m,
+    /// horizontally) from where the task needs it: the product's centre
+    /// (the grip) or the slot (the release). No motion is tried to it.
+    OffTarget { distance_m: f64 },
 }
 
 impl Shortfall {
@@ -249,6 +253,7 @@ impl Shortfall {
             Shortfall::Limits { .. } => "cup not kept down",
             Shortfall::Smoothing { .. } => "smoothing",
             Shortfall::Collides { .. } => "would collide",
+            Shortfall::OffTarget { .. } => "off target",
         }
     }
 }
@@ -275,6 +280,11 @@ impl fmt::Display for Shortfall {
                 write!(f, "the smoother refused the policy's steps ({reason})")
             }
             Shortfall::Collides { hit } => write!(f, "the policy's motion would collide ({hit})"),
+            Shortfall::OffTarget { distance_m } => write!(
+                f,
+                "the learned sub-goal is {:.1} mm off the product's centre or the slot",
+                distance_m * 1e3
+            ),
         }
     }
 }
@@ -288,6 +298,11 @@ pub struct Fallback {
     /// The stage's sub-goal (1, 2, 3) whose rollout fell short.
     pub subgoal: usize,
     pub why: Shortfall,
+    /// The first sub-goal (1, 2, 3) for which RRT-Connect went to the
+    /// expert's sub-goal instead of the learned one, which no free joint
+    /// motion reached (out of reach, or blocked); `None` when every
+    /// learned sub-goal of the stage was reached.
+    pub expert_from: Option<usize>,
 }
 
 /// What kind of fallback, for counting (stage, sub-goal, shortfall kind).
@@ -320,7 +335,11 @@ impl fmt::Display for Fallback {
             f,
             "{} {}, sub-goal {}: {}",
             self.stage, self.product, self.subgoal, self.why
-        )
+        )?;
+        match self.expert_from {
+            Some(k) => write!(f, "; RRT-Connect went to the expert's sub-goal {k}"),
+            None => Ok(()),
+        }
     }
 }
 

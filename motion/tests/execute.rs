@@ -136,6 +136,8 @@ fn planning_past_its_budget_stops_the_arm() {
         let policy = Scripted {
             task,
             wrong_pick: None,
+            lost: false,
+            beside: false,
         };
         let learned = Planner::Learned {
             policy: &policy,
@@ -284,6 +286,10 @@ struct Scripted {
     task: OrderTask,
     /// Pick this product first, whatever the order says.
     wrong_pick: Option<usize>,
+    /// Propose every sub-goal 3 m off, out of the arm's reach.
+    lost: bool,
+    /// Propose the release 5 cm beside the slot, within reach.
+    beside: bool,
 }
 
 impl Policy for Scripted {
@@ -344,7 +350,14 @@ impl Policy for Scripted {
                 )
             }
         };
-        goals[q.index.min(2)].tip.map(|v| v as f32)
+        let mut tip = goals[q.index.min(2)].tip;
+        if self.lost {
+            tip[0] += 3.0;
+        }
+        if self.beside && q.stage == Stage::Placing && q.index == 2 {
+            tip[1] += 0.05;
+        }
+        tip.map(|v| v as f32)
     }
 
     fn sequence(&self) -> SequenceRule {
@@ -366,6 +379,8 @@ fn the_learned_loop_falls_back_to_rrt_connect_and_says_why() {
     let policy = Scripted {
         task: task.clone(),
         wrong_pick: None,
+        lost: false,
+        beside: false,
     };
     let report = run_learned(&mut sim, &arm, &task, &policy);
     assert_packed(&report);
@@ -396,6 +411,77 @@ fn the_learned_loop_falls_back_to_rrt_connect_and_says_why() {
     )));
 }
 
+/// A sub-goal planner whose sub-goals are out of reach (a model on a cell
+/// unlike any it learned from): RRT-Connect cannot reach them either and
+/// goes to the expert's sub-goals instead; the package is packed and the
+/// fallbacks say so.
+#[test]
+fn a_fallback_goes_to_the_experts_sub_goal_when_the_learned_one_is_out_of_reach() {
+    let assign = [("A", "g1"), ("D", "g5")];
+    let (arm, task, mut sim) = episode(&assign, &[], &[]);
+    let policy = Scripted {
+        task: task.clone(),
+        wrong_pick: None,
+        lost: true,
+        beside: false,
+    };
+    let report = run_learned(&mut sim, &arm, &task, &policy);
+    assert_packed(&report);
+    assert!(report.violations.is_empty(), "{:?}", report.violations);
+    assert_eq!(
+        report.fallbacks.len(),
+        2 * assign.len(),
+        "{:#?}",
+        report.fallbacks
+    );
+    for f in &report.fallbacks {
+        assert_eq!((f.subgoal, f.expert_from), (1, Some(1)), "{f}");
+        assert!(
+            f.to_string()
+                .ends_with("RRT-Connect went to the expert's sub-goal 1"),
+            "{f}"
+        );
+    }
+    // With sub-goals in reach, no fallback goes to the expert's.
+    let (arm, task, mut sim) = episode(&assign, &[], &[]);
+    let policy = Scripted {
+        task: task.clone(),
+        wrong_pick: None,
+        lost: false,
+        beside: false,
+    };
+    let report = run_learned(&mut sim, &arm, &task, &policy);
+    assert!(report.fallbacks.iter().all(|f| f.expert_from.is_none()));
+}
+
+/// A learned release 5 cm beside the slot is reachable but would put the
+/// product outside it: it is not tried, RRT-Connect goes to the expert's
+/// release, and the fallback says why.
+#[test]
+fn a_release_off_the_slot_is_not_tried() {
+    let assign = [("A", "g1"), ("D", "g5")];
+    let (arm, task, mut sim) = episode(&assign, &[], &[]);
+    let policy = Scripted {
+        task: task.clone(),
+        wrong_pick: None,
+        lost: false,
+        beside: true,
+    };
+    let report = run_learned(&mut sim, &arm, &task, &policy);
+    assert_packed(&report);
+    let releases: Vec<_> = report
+        .fallbacks
+        .iter()
+        .filter(|f| f.stage == Stage::Placing)
+        .collect();
+    assert_eq!(releases.len(), assign.len(), "{:#?}", report.fallbacks);
+    for f in releases {
+        // The policy does not move, so placing falls back at sub-goal 1;
+        // the release (3) is then the expert's.
+        assert_eq!((f.subgoal, f.expert_from), (1, Some(3)), "{f}");
+    }
+}
+
 /// A reasoner that picks a product the order does not select breaks the
 /// order: the violation is reported and the arm stops before moving.
 #[test]
@@ -404,6 +490,8 @@ fn a_decision_against_the_order_stops_the_arm() {
     let policy = Scripted {
         task: task.clone(),
         wrong_pick: Some(1),
+        lost: false,
+        beside: false,
     };
     let report = run_learned(&mut sim, &arm, &task, &policy);
     assert!(!report.complete);

@@ -194,6 +194,7 @@ mod tests {
                 steps: 60,
                 distance_m: 0.01,
             },
+            expert_from: None,
         }
     }
 

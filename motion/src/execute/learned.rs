@@ -5,8 +5,11 @@
 //! [`MAX_POLICY_STEPS`] steps of at most 5 degrees, the wrist keeping the
 //! cup down). A rollout that does not reach its sub-goal, or whose motion
 //! would collide, hands the rest of the stage to RRT-Connect (a
-//! [`Fallback`]). A decision that breaks the order stops the arm (a
-//! [`Violation`]).
+//! [`Fallback`]), which goes to the learned sub-goals, or to the expert's
+//! where no free motion reaches a learned one. A learned grip or release
+//! more than [`SUCCESS_RADIUS`] off the product's centre or the slot is not
+//! tried: RRT-Connect goes to the expert's. A decision that breaks the
+//! order stops the arm (a [`Violation`]).
 
 use super::reasoner::{f32s, graph, in_slot, lifted};
 use super::station::{
@@ -15,7 +18,7 @@ use super::station::{
 };
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
-use crate::expert::{SubGoal, Suction, schedule};
+use crate::expert::{self, SubGoal, Suction, schedule};
 use nalgebra::{Isometry3, Vector3};
 use packwright_interface::outcome::{
     Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, Violation,
@@ -167,6 +170,9 @@ struct StagePlan<'l> {
     /// lift) carry it off where it stood, hanging from the cup as the
     /// planned contact leaves it.
     gripped: Option<[f64; 3]>,
+    /// The expert's sub-goals for the stage: where RRT-Connect goes
+    /// instead of a learned sub-goal it cannot reach.
+    expert: [SubGoal; 3],
 }
 
 /// The learned loop over the shared stepping primitives.
@@ -244,26 +250,54 @@ impl<W: World> Learned<'_, W> {
         }
     }
 
-    /// The rest of a stage's sub-goal `k` (from 0) by RRT-Connect.
+    /// The rest of a stage's sub-goal `k` (from 0) by RRT-Connect: to
+    /// the learned `goal` (raised up to `ceiling` if it is a release), else,
+    /// when no free motion reaches it or there is none, to the expert's
+    /// sub-goal `k` of the stage (raised up to the expert's previous
+    /// sub-goal's height). The route, and whether it went to the expert's
+    /// sub-goal; the learned sub-goal's failure when neither is reached.
     fn fall_back(
         &self,
         k: usize,
         start: Joints,
-        goal: SubGoal,
+        goal: Option<SubGoal>,
+        expert: &[SubGoal; 3],
         load: Load,
         ceiling: f64,
-    ) -> Result<Route, Failure> {
+    ) -> Result<(Route, bool), Failure> {
         let s = &self.station;
-        let target = s.solve(&goal, k + 1, &start, 0.0, load, ceiling)?;
-        s.route_any(
-            Connect::Rrt { seed: self.seed },
-            k + 1,
-            start,
-            target,
-            0.0,
-            load,
-        )
-        .map(|(_, route)| route)
+        let rrt = |goal: &SubGoal, ceiling: f64| {
+            let target = s.solve(goal, k + 1, &start, 0.0, load, ceiling)?;
+            s.route_any(
+                Connect::Rrt { seed: self.seed },
+                k + 1,
+                start,
+                target,
+                0.0,
+                load,
+            )
+            .map(|(_, route)| route)
+        };
+        let experts = || {
+            let ceiling = match k {
+                0 => expert[0].tip[2],
+                _ if expert[k].suction == Suction::Off => expert[k - 1].tip[2],
+                _ => expert[k].tip[2],
+            };
+            rrt(&expert[k], ceiling).map(|route| (route, true))
+        };
+        let Some(goal) = goal else {
+            return experts();
+        };
+        match rrt(&goal, ceiling) {
+            Ok(route) => Ok((route, false)),
+            Err(
+                learned @ (Failure::Unreachable { .. }
+                | Failure::WouldCollide { .. }
+                | Failure::NoPath { .. }),
+            ) if !s.late() => experts().map_err(|_| learned),
+            Err(other) => Err(other),
+        }
     }
 
     /// One stage with learned sub-goals and motions, planned from where
@@ -326,7 +360,16 @@ impl<W: World> Learned<'_, W> {
             } else {
                 goal[2]
             };
-            let rolled = (!fallen).then(|| {
+            // A learned grip or release off the product's centre or the slot
+            // would pack nothing, however well the arm reached it: the
+            // expert's sub-goal is used instead (by RRT-Connect).
+            let off = (switch != Suction::Keep)
+                .then(|| {
+                    let e = plan.expert[k].tip;
+                    (goal[0] - e[0]).hypot(goal[1] - e[1])
+                })
+                .filter(|d| *d > SUCCESS_RADIUS);
+            let rolled = (!fallen && off.is_none()).then(|| {
                 let tolerance = tolerance(plan.stage, k);
                 let mut first_action_us = None;
                 // The first attempt's shortfall is the one reported.
@@ -353,20 +396,37 @@ impl<W: World> Learned<'_, W> {
             let route = match rolled {
                 Some(Ok(route)) => route,
                 other => {
-                    if let Some(Err(why)) = other {
+                    let why = match (fallen, off, other) {
+                        (false, Some(distance_m), _) => Some(Shortfall::OffTarget { distance_m }),
+                        (_, _, Some(Err(why))) => Some(why),
+                        _ => None,
+                    };
+                    if let Some(why) = why {
                         self.fallbacks.push(Fallback {
                             product: plan.product.to_owned(),
                             stage: plan.stage,
                             subgoal: k + 1,
                             why,
+                            expert_from: None,
                         });
                     }
                     fallen = true;
-                    let target = SubGoal {
+                    let target = off.is_none().then_some(SubGoal {
                         tip: goal,
                         suction: switch,
-                    };
-                    self.fall_back(k, start, target, load, ceiling)?
+                    });
+                    let (route, expert) =
+                        self.fall_back(k, start, target, &plan.expert, load, ceiling)?;
+                    if expert {
+                        goals[k] = plan.expert[k].tip;
+                        if let Some(f) = self.fallbacks.last_mut()
+                            && f.product == plan.product
+                            && f.stage == plan.stage
+                        {
+                            f.expert_from.get_or_insert(k + 1);
+                        }
+                    }
+                    route
                 }
             };
             let elapsed = self.station.spend(k + 1, started)?;
@@ -531,6 +591,7 @@ impl<W: World> Learned<'_, W> {
                 contact: Some(centre[2] + spec.size[2] / 2.0),
                 load: Load::ignoring(name),
                 gripped: Some(spec.size),
+                expert: expert::picking(centre, spec.size[2], cell.lift),
             },
             backup,
             true,
@@ -580,6 +641,14 @@ impl<W: World> Learned<'_, W> {
         );
         self.station.sync_products(&obs);
         let rim = task.slot_rim(s);
+        let slot = cell.slots[s].position;
+        let expert = expert::placing(
+            picked.tips[2],
+            [slot[0] - grip[0], slot[1] - grip[1]],
+            spec.size[2],
+            expert::box_height(cell, s),
+            [cell.base[0], cell.base[1]],
+        );
         let (placed, _) = self.stage(
             &StagePlan {
                 stage: Stage::Placing,
@@ -589,6 +658,7 @@ impl<W: World> Learned<'_, W> {
                 contact: None,
                 load: Load::holding(&held),
                 gripped: None,
+                expert,
             },
             lift,
             false,
