@@ -67,6 +67,54 @@ impl Dense {
         }
     }
 
+    /// `W x + b` for `R` rows at once (`x[r]` of `self.inputs` values into
+    /// `y[r]` of `self.outputs`), bit for bit what [`Dense::apply_into`]
+    /// gives each row: every output gets the same products added in the
+    /// same order, the inputs that are 0 skipped. A block of [`BLOCK`]
+    /// outputs of every row stays in registers while the inputs pass, so
+    /// each weight is loaded once for all the rows and no output is stored
+    /// until its block is done.
+    fn apply_rows<const R: usize>(&self, x: [&[f32]; R], mut y: [&mut [f32]; R]) {
+        let whole = self.outputs - self.outputs % BLOCK;
+        for start in (0..whole).step_by(BLOCK) {
+            self.apply_columns(start..start + BLOCK, x, &mut y);
+        }
+        if whole < self.outputs {
+            self.apply_columns(whole..self.outputs, x, &mut y);
+        }
+    }
+
+    /// [`Dense::apply_rows`] for the outputs in `columns` (at most
+    /// [`BLOCK`]); inlined, so that for a whole block the accumulators'
+    /// size is known and they live in registers.
+    #[inline(always)]
+    fn apply_columns<const R: usize>(
+        &self,
+        columns: std::ops::Range<usize>,
+        x: [&[f32]; R],
+        y: &mut [&mut [f32]; R],
+    ) {
+        let n = columns.len();
+        // As `apply_into`'s zip: no further than the shortest row.
+        let inputs = x.iter().map(|row| row.len()).fold(self.inputs, usize::min);
+        let mut acc = [[0.0f32; BLOCK]; R];
+        for a in &mut acc {
+            a[..n].copy_from_slice(&self.b[columns.clone()]);
+        }
+        for (j, column) in self.w.chunks_exact(self.outputs).enumerate().take(inputs) {
+            let w = &column[columns.clone()];
+            for (a, row) in acc.iter_mut().zip(x) {
+                let xj = row[j];
+                if xj != 0.0 {
+                    axpy(&mut a[..n], w, xj);
+                }
+            }
+        }
+        for (a, out) in acc.iter().zip(y.iter_mut()) {
+            out[columns.clone()].copy_from_slice(&a[..n]);
+        }
+    }
+
     fn apply(&self, x: &[f32]) -> Vec<f32> {
         let mut y = vec![0.0; self.outputs];
         self.apply_into(x, 1, &mut y);
@@ -93,6 +141,11 @@ fn argmax(v: impl Iterator<Item = f32>) -> usize {
         })
         .0
 }
+
+/// Outputs per register block of [`Dense::apply_rows`]: two rows of 16
+/// accumulators take 8 of the 16 SSE registers, leaving room for the
+/// weights.
+const BLOCK: usize = 16;
 
 /// Cache-line aligned values.
 #[repr(align(64))]
@@ -325,15 +378,42 @@ pub struct DynamicsWeights {
 impl DynamicsWeights {
     /// Fractions of the largest step for (delta, joints)
     /// ([`action_input`]), minus the output at delta 0.
+    ///
+    /// Both rows go through the layers together ([`Dense::apply_rows`]):
+    /// a policy step is two passes over the same weights, and this is the
+    /// learned planner's inner loop (some thirty steps per sub-goal).
     pub fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
-        let x = action_input(delta, joints);
-        let mut zero = x;
-        zero[..3].fill(0.0);
-        debug_assert_eq!(x.len(), ACTION_INPUTS);
-        let moved = relu_mlp(&self.layers, &x);
-        let still = relu_mlp(&self.layers, &zero);
-        std::array::from_fn(|j| {
-            moved.get(j).copied().unwrap_or(0.0) - still.get(j).copied().unwrap_or(0.0)
+        let moved = action_input(delta, joints);
+        let mut still = moved;
+        still[..3].fill(0.0);
+        let width = self
+            .layers
+            .iter()
+            .map(|l| l.outputs)
+            .chain([ACTION_INPUTS])
+            .max()
+            .unwrap_or(ACTION_INPUTS)
+            .next_multiple_of(16);
+        with_scratch::<{ 2 * MLP_SCRATCH }, _>(4 * width, |scratch| {
+            let (a, b) = scratch.split_at_mut(2 * width);
+            let (mut a0, mut a1) = a.split_at_mut(width);
+            let (mut b0, mut b1) = b.split_at_mut(width);
+            a0[..ACTION_INPUTS].copy_from_slice(&moved);
+            a1[..ACTION_INPUTS].copy_from_slice(&still);
+            let mut n = ACTION_INPUTS;
+            let last = self.layers.len().saturating_sub(1);
+            for (i, layer) in self.layers.iter().enumerate() {
+                layer.apply_rows([&a0[..n], &a1[..n]], [&mut *b0, &mut *b1]);
+                n = layer.outputs;
+                if i < last {
+                    for v in b0[..n].iter_mut().chain(&mut b1[..n]) {
+                        *v = v.max(0.0);
+                    }
+                }
+                std::mem::swap(&mut a0, &mut b0);
+                std::mem::swap(&mut a1, &mut b1);
+            }
+            std::array::from_fn(|j| if j < n { a0[j] - a1[j] } else { 0.0 })
         })
     }
 }
@@ -357,6 +437,50 @@ mod tests {
         let w = (0..inputs * outputs).map(|_| 2.0 * next()).collect();
         let b = (0..outputs).map(|_| next()).collect();
         Dense::new(inputs, outputs, w, Some(b)).expect("shapes")
+    }
+
+    /// The dynamics action as it was computed before the two rows went
+    /// through the layers together: two separate passes.
+    fn action_in_two_passes(weights: &DynamicsWeights, delta: [f32; 3], q: [f32; 3]) -> [f32; 3] {
+        let x = action_input(delta, q);
+        let mut zero = x;
+        zero[..3].fill(0.0);
+        let moved = relu_mlp(&weights.layers, &x);
+        let still = relu_mlp(&weights.layers, &zero);
+        std::array::from_fn(|j| {
+            moved.get(j).copied().unwrap_or(0.0) - still.get(j).copied().unwrap_or(0.0)
+        })
+    }
+
+    /// The two-row pass gives the very bits of the two passes, on random
+    /// weights of the model's shape and of widths that leave part of a
+    /// register block, with inputs that are exactly 0 among them.
+    #[test]
+    fn the_paired_action_is_bit_identical_to_two_passes() {
+        for (seed, widths) in (0..300).zip([[64, 64, 3], [20, 37, 3], [16, 1, 5]].iter().cycle()) {
+            let mut next = numbers(seed);
+            let mut inputs = ACTION_INPUTS;
+            let layers = widths
+                .iter()
+                .map(|&outputs| {
+                    let layer = dense(inputs, outputs, &mut next);
+                    inputs = outputs;
+                    layer
+                })
+                .collect();
+            let weights = DynamicsWeights { layers };
+            for _ in 0..20 {
+                let mut value = || if next() < -0.8 { 0.0 } else { 2.0 * next() };
+                let delta = [value(), value(), value()];
+                let q = [value(), value(), value()];
+                let bits = |a: [f32; 3]| a.map(f32::to_bits);
+                assert_eq!(
+                    bits(weights.action(delta, q)),
+                    bits(action_in_two_passes(&weights, delta, q)),
+                    "seed {seed}, widths {widths:?}, delta {delta:?}, joints {q:?}"
+                );
+            }
+        }
     }
 
     /// Whatever the weights, of two nodes alike but for their place along
