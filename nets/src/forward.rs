@@ -95,7 +95,8 @@ impl Dense {
         y: &mut [&mut [f32]; R],
     ) {
         let n = columns.len();
-        // As `apply_into`'s zip: no further than the shortest row.
+        // Rows shorter than the layer's inputs (never with loaded weights,
+        // whose widths are checked) end the sum rather than panic.
         let inputs = x.iter().map(|row| row.len()).fold(self.inputs, usize::min);
         let mut acc = [[0.0f32; BLOCK]; R];
         for a in &mut acc {
@@ -114,12 +115,6 @@ impl Dense {
             out[columns.clone()].copy_from_slice(&a[..n]);
         }
     }
-
-    fn apply(&self, x: &[f32]) -> Vec<f32> {
-        let mut y = vec![0.0; self.outputs];
-        self.apply_into(x, 1, &mut y);
-        y
-    }
 }
 
 /// `y += a x` (vectorised: contiguous, no bounds checks in the loop).
@@ -127,11 +122,6 @@ fn axpy(y: &mut [f32], x: &[f32], a: f32) {
     for (y, x) in y.iter_mut().zip(x) {
         *y += a * x;
     }
-}
-
-fn tanh(mut x: Vec<f32>) -> Vec<f32> {
-    x.iter_mut().for_each(|v| *v = v.tanh());
-    x
 }
 
 fn argmax(v: impl Iterator<Item = f32>) -> usize {
@@ -357,16 +347,41 @@ pub struct SubGoalWeights {
 
 impl SubGoalWeights {
     /// The Gaussian head's mean with the latent at its mean (run time).
+    ///
+    /// In stack scratch, as the policy's steps: the first call of a
+    /// sub-goal comes after the simulator ran, with the allocator cold.
     pub fn mean(&self, input: &[f32]) -> [f32; 3] {
-        let mut h = input.to_vec();
-        for layer in &self.hidden {
-            h = tanh(layer.apply(&h));
-        }
-        let z = self.latent_mean.apply(&h);
-        h.extend(z);
-        let d = tanh(self.decoder.apply(&h));
-        let out = self.mean.apply(&d);
-        std::array::from_fn(|j| out.get(j).copied().unwrap_or(0.0))
+        let hidden = self.hidden.last().map_or(input.len(), |l| l.outputs);
+        let width = self
+            .hidden
+            .iter()
+            .chain([&self.decoder, &self.mean])
+            .map(|l| l.outputs)
+            .chain([input.len(), hidden + self.latent_mean.outputs])
+            .max()
+            .unwrap_or(input.len())
+            .next_multiple_of(16);
+        with_scratch::<MLP_SCRATCH, _>(2 * width, |scratch| {
+            let (mut a, mut b) = scratch.split_at_mut(width);
+            a[..input.len()].copy_from_slice(input);
+            let mut n = input.len();
+            for layer in &self.hidden {
+                layer.apply_rows([&a[..n]], [&mut *b]);
+                n = layer.outputs;
+                b[..n].iter_mut().for_each(|v| *v = v.tanh());
+                std::mem::swap(&mut a, &mut b);
+            }
+            // The decoder's input: the hidden values, then the latent mean.
+            let (h, z) = a.split_at_mut(n);
+            self.latent_mean
+                .apply_rows([&*h], [&mut z[..self.latent_mean.outputs]]);
+            n += self.latent_mean.outputs;
+            self.decoder.apply_rows([&a[..n]], [&mut *b]);
+            let d = &mut b[..self.decoder.outputs];
+            d.iter_mut().for_each(|v| *v = v.tanh());
+            self.mean.apply_rows([&*d], [&mut *a]);
+            std::array::from_fn(|j| if j < self.mean.outputs { a[j] } else { 0.0 })
+        })
     }
 }
 
@@ -478,6 +493,57 @@ mod tests {
                     bits(weights.action(delta, q)),
                     bits(action_in_two_passes(&weights, delta, q)),
                     "seed {seed}, widths {widths:?}, delta {delta:?}, joints {q:?}"
+                );
+            }
+        }
+    }
+
+    /// The sub-goal planner's mean as it was computed before it ran in
+    /// stack scratch: a vector per layer.
+    fn mean_in_vectors(weights: &SubGoalWeights, input: &[f32]) -> [f32; 3] {
+        let apply = |layer: &Dense, x: &[f32]| {
+            let mut y = vec![0.0; layer.outputs];
+            layer.apply_into(x, 1, &mut y);
+            y
+        };
+        let tanh = |mut x: Vec<f32>| {
+            x.iter_mut().for_each(|v| *v = v.tanh());
+            x
+        };
+        let mut h = input.to_vec();
+        for layer in &weights.hidden {
+            h = tanh(apply(layer, &h));
+        }
+        let z = apply(&weights.latent_mean, &h);
+        h.extend(z);
+        let d = tanh(apply(&weights.decoder, &h));
+        let out = apply(&weights.mean, &d);
+        std::array::from_fn(|j| out.get(j).copied().unwrap_or(0.0))
+    }
+
+    /// The sub-goal mean in scratch gives the very bits of the vectors, on
+    /// random weights of the model's shape and of other widths.
+    #[test]
+    fn the_sub_goal_mean_in_scratch_is_bit_identical_to_vectors() {
+        let shapes = [(64, 4, 3), (20, 5, 3), (16, 1, 2)];
+        for (seed, &(h, z, out)) in (0..300).zip(shapes.iter().cycle()) {
+            let mut next = numbers(seed);
+            let inputs = crate::features::SUBGOAL_INPUTS;
+            let weights = SubGoalWeights {
+                hidden: vec![dense(inputs, h, &mut next), dense(h, h, &mut next)],
+                latent_mean: dense(h, z, &mut next),
+                decoder: dense(h + z, h, &mut next),
+                mean: dense(h, out, &mut next),
+            };
+            for _ in 0..20 {
+                let input: Vec<f32> = (0..inputs)
+                    .map(|_| if next() < -0.5 { 0.0 } else { next() })
+                    .collect();
+                let bits = |a: [f32; 3]| a.map(f32::to_bits);
+                assert_eq!(
+                    bits(weights.mean(&input)),
+                    bits(mean_in_vectors(&weights, &input)),
+                    "seed {seed}, input {input:?}"
                 );
             }
         }
