@@ -684,6 +684,17 @@ pub(super) fn run<W: World>(
 mod tests {
     use super::*;
 
+    /// A way of stepping the policy, with the signature of [`policy_steps`].
+    type Stepper = fn(
+        &Arm,
+        &Isometry3<f64>,
+        f64,
+        Joints,
+        [f64; 3],
+        f64,
+        &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
+    ) -> Result<Vec<Joints>, Shortfall>;
+
     /// The policy's steps as they were taken before each flange pose was
     /// computed once: the tip and both sides of the wrist check each by
     /// forward kinematics of their own.
@@ -768,15 +779,7 @@ mod tests {
                 (&wander, near, 1e-9),
                 (&bend, far, 0.01),
             ] {
-                let run = |stepper: fn(
-                    &Arm,
-                    &Isometry3<f64>,
-                    f64,
-                    Joints,
-                    [f64; 3],
-                    f64,
-                    &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
-                ) -> Result<Vec<Joints>, Shortfall>| {
+                let run = |stepper: Stepper| {
                     let mut k = 0;
                     let result =
                         stepper(&arm, &base, suction, start, goal, tolerance, &mut |_, _| {
