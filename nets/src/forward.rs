@@ -67,10 +67,75 @@ impl Dense {
         }
     }
 
-    fn apply(&self, x: &[f32]) -> Vec<f32> {
-        let mut y = vec![0.0; self.outputs];
-        self.apply_into(x, 1, &mut y);
-        y
+    /// `W x + b` for `R` rows at once (`x[r]` of `self.inputs` values into
+    /// `y[r]` of `self.outputs`), bit for bit what [`Dense::apply_into`]
+    /// gives each row: every output gets the same products added in the
+    /// same order, the inputs that are 0 skipped. A block of outputs of
+    /// every row stays in registers while the inputs pass, so no output is
+    /// stored until its block is done and each weight is read once per
+    /// block, not once per row; with AVX2 the blocks are twice as wide.
+    fn apply_rows<const R: usize>(&self, x: [&[f32]; R], y: [&mut [f32]; R]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.apply_rows_avx2(x, y) };
+        }
+        self.apply_blocks::<R, BLOCK>(x, y);
+    }
+
+    /// [`Dense::apply_rows`] in 256-bit registers. AVX2 only, not FMA: a
+    /// fused multiply-add rounds once where `axpy` rounds twice, and the
+    /// results must not depend on the CPU.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn apply_rows_avx2<const R: usize>(&self, x: [&[f32]; R], y: [&mut [f32]; R]) {
+        self.apply_blocks::<R, { 2 * BLOCK }>(x, y);
+    }
+
+    /// [`Dense::apply_rows`] in blocks of `B` outputs, the last one
+    /// shorter; inlined into the callers above, so that it is compiled for
+    /// their instruction sets.
+    #[inline(always)]
+    fn apply_blocks<const R: usize, const B: usize>(&self, x: [&[f32]; R], mut y: [&mut [f32]; R]) {
+        let whole = self.outputs - self.outputs % B;
+        for start in (0..whole).step_by(B) {
+            self.apply_columns::<R, B>(start..start + B, x, &mut y);
+        }
+        if whole < self.outputs {
+            self.apply_columns::<R, B>(whole..self.outputs, x, &mut y);
+        }
+    }
+
+    /// [`Dense::apply_blocks`] for the outputs in `columns` (at most `B`);
+    /// inlined, so that for a whole block the accumulators' size is known
+    /// and they live in registers.
+    #[inline(always)]
+    fn apply_columns<const R: usize, const B: usize>(
+        &self,
+        columns: std::ops::Range<usize>,
+        x: [&[f32]; R],
+        y: &mut [&mut [f32]; R],
+    ) {
+        let n = columns.len();
+        // Rows shorter than the layer's inputs (never with loaded weights,
+        // whose widths are checked) end the sum rather than panic.
+        let inputs = x.iter().map(|row| row.len()).fold(self.inputs, usize::min);
+        let mut acc = [[0.0f32; B]; R];
+        for a in &mut acc {
+            a[..n].copy_from_slice(&self.b[columns.clone()]);
+        }
+        for (j, column) in self.w.chunks_exact(self.outputs).enumerate().take(inputs) {
+            let w = &column[columns.clone()];
+            for (a, row) in acc.iter_mut().zip(x) {
+                let xj = row[j];
+                if xj != 0.0 {
+                    axpy(&mut a[..n], w, xj);
+                }
+            }
+        }
+        for (a, out) in acc.iter().zip(y.iter_mut()) {
+            out[columns.clone()].copy_from_slice(&a[..n]);
+        }
     }
 }
 
@@ -81,11 +146,6 @@ fn axpy(y: &mut [f32], x: &[f32], a: f32) {
     }
 }
 
-fn tanh(mut x: Vec<f32>) -> Vec<f32> {
-    x.iter_mut().for_each(|v| *v = v.tanh());
-    x
-}
-
 fn argmax(v: impl Iterator<Item = f32>) -> usize {
     v.enumerate()
         .fold((0, f32::NEG_INFINITY), |best, (i, x)| {
@@ -93,6 +153,11 @@ fn argmax(v: impl Iterator<Item = f32>) -> usize {
         })
         .0
 }
+
+/// Outputs per register block of [`Dense::apply_rows`] (twice as many
+/// with AVX2): two rows of 16 accumulators take 8 of the 16 SSE (AVX)
+/// registers, leaving room for the weights.
+const BLOCK: usize = 16;
 
 /// Cache-line aligned values.
 #[repr(align(64))]
@@ -304,16 +369,41 @@ pub struct SubGoalWeights {
 
 impl SubGoalWeights {
     /// The Gaussian head's mean with the latent at its mean (run time).
+    ///
+    /// In stack scratch, as the policy's steps: the first call of a
+    /// sub-goal comes after the simulator ran, with the allocator cold.
     pub fn mean(&self, input: &[f32]) -> [f32; 3] {
-        let mut h = input.to_vec();
-        for layer in &self.hidden {
-            h = tanh(layer.apply(&h));
-        }
-        let z = self.latent_mean.apply(&h);
-        h.extend(z);
-        let d = tanh(self.decoder.apply(&h));
-        let out = self.mean.apply(&d);
-        std::array::from_fn(|j| out.get(j).copied().unwrap_or(0.0))
+        let hidden = self.hidden.last().map_or(input.len(), |l| l.outputs);
+        let width = self
+            .hidden
+            .iter()
+            .chain([&self.decoder, &self.mean])
+            .map(|l| l.outputs)
+            .chain([input.len(), hidden + self.latent_mean.outputs])
+            .max()
+            .unwrap_or(input.len())
+            .next_multiple_of(16);
+        with_scratch::<MLP_SCRATCH, _>(2 * width, |scratch| {
+            let (mut a, mut b) = scratch.split_at_mut(width);
+            a[..input.len()].copy_from_slice(input);
+            let mut n = input.len();
+            for layer in &self.hidden {
+                layer.apply_rows([&a[..n]], [&mut *b]);
+                n = layer.outputs;
+                b[..n].iter_mut().for_each(|v| *v = v.tanh());
+                std::mem::swap(&mut a, &mut b);
+            }
+            // The decoder's input: the hidden values, then the latent mean.
+            let (h, z) = a.split_at_mut(n);
+            self.latent_mean
+                .apply_rows([&*h], [&mut z[..self.latent_mean.outputs]]);
+            n += self.latent_mean.outputs;
+            self.decoder.apply_rows([&a[..n]], [&mut *b]);
+            let d = &mut b[..self.decoder.outputs];
+            d.iter_mut().for_each(|v| *v = v.tanh());
+            self.mean.apply_rows([&*d], [&mut *a]);
+            std::array::from_fn(|j| if j < self.mean.outputs { a[j] } else { 0.0 })
+        })
     }
 }
 
@@ -325,15 +415,42 @@ pub struct DynamicsWeights {
 impl DynamicsWeights {
     /// Fractions of the largest step for (delta, joints)
     /// ([`action_input`]), minus the output at delta 0.
+    ///
+    /// Both rows go through the layers together ([`Dense::apply_rows`]):
+    /// a policy step is two passes over the same weights, and this is the
+    /// learned planner's inner loop (some thirty steps per sub-goal).
     pub fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
-        let x = action_input(delta, joints);
-        let mut zero = x;
-        zero[..3].fill(0.0);
-        debug_assert_eq!(x.len(), ACTION_INPUTS);
-        let moved = relu_mlp(&self.layers, &x);
-        let still = relu_mlp(&self.layers, &zero);
-        std::array::from_fn(|j| {
-            moved.get(j).copied().unwrap_or(0.0) - still.get(j).copied().unwrap_or(0.0)
+        let moved = action_input(delta, joints);
+        let mut still = moved;
+        still[..3].fill(0.0);
+        let width = self
+            .layers
+            .iter()
+            .map(|l| l.outputs)
+            .chain([ACTION_INPUTS])
+            .max()
+            .unwrap_or(ACTION_INPUTS)
+            .next_multiple_of(16);
+        with_scratch::<{ 2 * MLP_SCRATCH }, _>(4 * width, |scratch| {
+            let (a, b) = scratch.split_at_mut(2 * width);
+            let (mut a0, mut a1) = a.split_at_mut(width);
+            let (mut b0, mut b1) = b.split_at_mut(width);
+            a0[..ACTION_INPUTS].copy_from_slice(&moved);
+            a1[..ACTION_INPUTS].copy_from_slice(&still);
+            let mut n = ACTION_INPUTS;
+            let last = self.layers.len().saturating_sub(1);
+            for (i, layer) in self.layers.iter().enumerate() {
+                layer.apply_rows([&a0[..n], &a1[..n]], [&mut *b0, &mut *b1]);
+                n = layer.outputs;
+                if i < last {
+                    for v in b0[..n].iter_mut().chain(&mut b1[..n]) {
+                        *v = v.max(0.0);
+                    }
+                }
+                std::mem::swap(&mut a0, &mut b0);
+                std::mem::swap(&mut a1, &mut b1);
+            }
+            std::array::from_fn(|j| if j < n { a0[j] - a1[j] } else { 0.0 })
         })
     }
 }
@@ -357,6 +474,144 @@ mod tests {
         let w = (0..inputs * outputs).map(|_| 2.0 * next()).collect();
         let b = (0..outputs).map(|_| next()).collect();
         Dense::new(inputs, outputs, w, Some(b)).expect("shapes")
+    }
+
+    /// Both block widths (SSE's and AVX2's, whichever this CPU would
+    /// take), one row or two, give the bits of one row at a time, on
+    /// widths that leave part of a block and inputs that are 0 or -0.
+    #[test]
+    fn blocked_rows_are_bit_identical_to_one_row_at_a_time() {
+        for (seed, &(inputs, outputs)) in (0..200).zip([(64, 64), (5, 37), (68, 3)].iter().cycle())
+        {
+            let mut next = numbers(seed);
+            let layer = dense(inputs, outputs, &mut next);
+            let mut row = || -> Vec<f32> {
+                (0..inputs)
+                    .map(|_| match next() {
+                        v if v < -0.6 => 0.0,
+                        v if v < -0.4 => -0.0,
+                        _ => 3.0 * next(),
+                    })
+                    .collect()
+            };
+            let (x0, x1) = (row(), row());
+            let one_at_a_time = |x: &[f32]| {
+                let mut y = vec![0.0; outputs];
+                layer.apply_into(x, 1, &mut y);
+                y.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            };
+            let bits = |y: &[f32]| y.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            let (mut y0, mut y1) = (vec![0.0; outputs], vec![0.0; outputs]);
+            layer.apply_blocks::<2, BLOCK>([&x0, &x1], [&mut y0, &mut y1]);
+            assert_eq!(
+                (bits(&y0), bits(&y1)),
+                (one_at_a_time(&x0), one_at_a_time(&x1))
+            );
+            layer.apply_blocks::<2, { 2 * BLOCK }>([&x0, &x1], [&mut y0, &mut y1]);
+            assert_eq!(
+                (bits(&y0), bits(&y1)),
+                (one_at_a_time(&x0), one_at_a_time(&x1))
+            );
+            layer.apply_blocks::<1, BLOCK>([&x1], [&mut y1]);
+            assert_eq!(bits(&y1), one_at_a_time(&x1));
+            layer.apply_rows([&x0], [&mut y0]);
+            assert_eq!(bits(&y0), one_at_a_time(&x0));
+        }
+    }
+
+    /// The dynamics action as it was computed before the two rows went
+    /// through the layers together: two separate passes.
+    fn action_in_two_passes(weights: &DynamicsWeights, delta: [f32; 3], q: [f32; 3]) -> [f32; 3] {
+        let x = action_input(delta, q);
+        let mut zero = x;
+        zero[..3].fill(0.0);
+        let moved = relu_mlp(&weights.layers, &x);
+        let still = relu_mlp(&weights.layers, &zero);
+        std::array::from_fn(|j| {
+            moved.get(j).copied().unwrap_or(0.0) - still.get(j).copied().unwrap_or(0.0)
+        })
+    }
+
+    /// The two-row pass gives the very bits of the two passes, on random
+    /// weights of the model's shape and of widths that leave part of a
+    /// register block, with inputs that are exactly 0 among them.
+    #[test]
+    fn the_paired_action_is_bit_identical_to_two_passes() {
+        for (seed, widths) in (0..300).zip([[64, 64, 3], [20, 37, 3], [16, 1, 5]].iter().cycle()) {
+            let mut next = numbers(seed);
+            let mut inputs = ACTION_INPUTS;
+            let layers = widths
+                .iter()
+                .map(|&outputs| {
+                    let layer = dense(inputs, outputs, &mut next);
+                    inputs = outputs;
+                    layer
+                })
+                .collect();
+            let weights = DynamicsWeights { layers };
+            for _ in 0..20 {
+                let mut value = || if next() < -0.8 { 0.0 } else { 2.0 * next() };
+                let delta = [value(), value(), value()];
+                let q = [value(), value(), value()];
+                let bits = |a: [f32; 3]| a.map(f32::to_bits);
+                assert_eq!(
+                    bits(weights.action(delta, q)),
+                    bits(action_in_two_passes(&weights, delta, q)),
+                    "seed {seed}, widths {widths:?}, delta {delta:?}, joints {q:?}"
+                );
+            }
+        }
+    }
+
+    /// The sub-goal planner's mean as it was computed before it ran in
+    /// stack scratch: a vector per layer.
+    fn mean_in_vectors(weights: &SubGoalWeights, input: &[f32]) -> [f32; 3] {
+        let apply = |layer: &Dense, x: &[f32]| {
+            let mut y = vec![0.0; layer.outputs];
+            layer.apply_into(x, 1, &mut y);
+            y
+        };
+        let tanh = |mut x: Vec<f32>| {
+            x.iter_mut().for_each(|v| *v = v.tanh());
+            x
+        };
+        let mut h = input.to_vec();
+        for layer in &weights.hidden {
+            h = tanh(apply(layer, &h));
+        }
+        let z = apply(&weights.latent_mean, &h);
+        h.extend(z);
+        let d = tanh(apply(&weights.decoder, &h));
+        let out = apply(&weights.mean, &d);
+        std::array::from_fn(|j| out.get(j).copied().unwrap_or(0.0))
+    }
+
+    /// The sub-goal mean in scratch gives the very bits of the vectors, on
+    /// random weights of the model's shape and of other widths.
+    #[test]
+    fn the_sub_goal_mean_in_scratch_is_bit_identical_to_vectors() {
+        let shapes = [(64, 4, 3), (20, 5, 3), (16, 1, 2)];
+        for (seed, &(h, z, out)) in (0..300).zip(shapes.iter().cycle()) {
+            let mut next = numbers(seed);
+            let inputs = crate::features::SUBGOAL_INPUTS;
+            let weights = SubGoalWeights {
+                hidden: vec![dense(inputs, h, &mut next), dense(h, h, &mut next)],
+                latent_mean: dense(h, z, &mut next),
+                decoder: dense(h + z, h, &mut next),
+                mean: dense(h, out, &mut next),
+            };
+            for _ in 0..20 {
+                let input: Vec<f32> = (0..inputs)
+                    .map(|_| if next() < -0.5 { 0.0 } else { next() })
+                    .collect();
+                let bits = |a: [f32; 3]| a.map(f32::to_bits);
+                assert_eq!(
+                    bits(weights.mean(&input)),
+                    bits(mean_in_vectors(&weights, &input)),
+                    "seed {seed}, input {input:?}"
+                );
+            }
+        }
     }
 
     /// Whatever the weights, of two nodes alike but for their place along

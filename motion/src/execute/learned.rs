@@ -19,7 +19,7 @@ use super::station::{
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::{Isometry3, Point3, Vector3};
 use packwright_interface::outcome::{
     Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, Violation,
 };
@@ -68,15 +68,27 @@ pub fn cup_down(
     q: &Joints,
     step: [f64; 3],
 ) -> Result<Joints, Shortfall> {
+    cup_down_from(arm, base, q, &arm.flange_pose(base, q), step).map(|(next, _)| next)
+}
+
+/// [`cup_down`] from `q` whose flange pose `flange` is known, with the
+/// flange pose of the joints it returns: stepping along, each pose is
+/// computed once (forward kinematics is most of a policy step's own work).
+fn cup_down_from(
+    arm: &Arm,
+    base: &Isometry3<f64>,
+    q: &Joints,
+    flange: &Isometry3<f64>,
+    step: [f64; 3],
+) -> Result<(Joints, Isometry3<f64>), Shortfall> {
     let mut next = *q;
     next[0] += step[0];
     next[1] += step[1];
     next[2] += step[2];
     next[3] -= step[1] + step[2];
     next[5] += step[0];
-    let before = arm.flange_pose(base, q).rotation;
-    let after = arm.flange_pose(base, &next).rotation;
-    if before.angle_to(&after) >= 1e-6 {
+    let after = arm.flange_pose(base, &next);
+    if flange.rotation.angle_to(&after.rotation) >= 1e-6 {
         return Err(Shortfall::Limits {
             joint: None,
             value: f64::NAN,
@@ -87,7 +99,7 @@ pub fn cup_down(
             joint: Some(j),
             value: next[j],
         }),
-        None => Ok(next),
+        None => Ok((next, after)),
     }
 }
 
@@ -108,9 +120,11 @@ pub fn policy_steps(
     action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
 ) -> Result<Vec<Joints>, Shortfall> {
     let mut q = start;
+    let mut flange = arm.flange_pose(base, &q);
     let mut steps = Vec::new();
     loop {
-        let tip: [f64; 3] = arm.tool_tip(base, &q, suction).coords.into();
+        // `Arm::tool_tip`, from the flange pose the step computed.
+        let tip: [f64; 3] = (flange * Point3::new(0.0, 0.0, suction)).coords.into();
         let delta: [f64; 3] = std::array::from_fn(|j| goal[j] - tip[j]);
         let away = delta.iter().map(|d| d * d).sum::<f64>().sqrt();
         if away <= tolerance {
@@ -123,7 +137,7 @@ pub fn policy_steps(
             });
         }
         let step = record::clip(action(&q, delta).map(f64::from));
-        q = cup_down(arm, base, &q, step)?;
+        (q, flange) = cup_down_from(arm, base, &q, &flange, step)?;
         steps.push(q);
     }
 }
@@ -207,11 +221,15 @@ impl<W: World> Learned<'_, W> {
             goal,
             tolerance,
             &mut |q, delta| {
-                let called = Instant::now();
+                // Only the first call is timed (`get_or_insert` would read
+                // the clock at every step).
+                let called = first_action_us.is_none().then(Instant::now);
                 let action = self
                     .policy
                     .action(f32s(delta), [q[0] as f32, q[1] as f32, q[2] as f32]);
-                first_action_us.get_or_insert(called.elapsed().as_secs_f64() * 1e6);
+                if let Some(called) = called {
+                    *first_action_us = Some(called.elapsed().as_secs_f64() * 1e6);
+                }
                 action
             },
         )?;
@@ -730,4 +748,128 @@ pub(super) fn run<W: World>(
     report.complete &= violations.is_empty();
     report.violations = violations;
     report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A way of stepping the policy, with the signature of [`policy_steps`].
+    type Stepper = fn(
+        &Arm,
+        &Isometry3<f64>,
+        f64,
+        Joints,
+        [f64; 3],
+        f64,
+        &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
+    ) -> Result<Vec<Joints>, Shortfall>;
+
+    /// The policy's steps as they were taken before each flange pose was
+    /// computed once: the tip and both sides of the wrist check each by
+    /// forward kinematics of their own.
+    fn steps_by_separate_poses(
+        arm: &Arm,
+        base: &Isometry3<f64>,
+        suction: f64,
+        start: Joints,
+        goal: [f64; 3],
+        tolerance: f64,
+        action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
+    ) -> Result<Vec<Joints>, Shortfall> {
+        let mut q = start;
+        let mut steps = Vec::new();
+        loop {
+            let tip: [f64; 3] = arm.tool_tip(base, &q, suction).coords.into();
+            let delta: [f64; 3] = std::array::from_fn(|j| goal[j] - tip[j]);
+            let away = delta.iter().map(|d| d * d).sum::<f64>().sqrt();
+            if away <= tolerance {
+                return Ok(steps);
+            }
+            if steps.len() == MAX_POLICY_STEPS {
+                return Err(Shortfall::Short {
+                    steps: MAX_POLICY_STEPS,
+                    distance_m: away,
+                });
+            }
+            let step = record::clip(action(&q, delta).map(f64::from));
+            q = cup_down(arm, base, &q, step)?;
+            steps.push(q);
+        }
+    }
+
+    /// Random actions from cup-down starts give the very same steps, tips
+    /// and shortfalls as forward kinematics at every use: short of a goal
+    /// out of reach, at a goal some steps away, or off the joint limits.
+    #[test]
+    fn policy_steps_match_separate_forward_kinematics() {
+        let arm = Arm::ur10();
+        let base = Isometry3::translation(0.1, -0.2, 0.05);
+        let suction = 0.12;
+        let mut x = 17u64;
+        let mut next = move || {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((x >> 40) as f64 / (1u64 << 24) as f64) * 2.0 - 1.0
+        };
+        let mut outcomes = Vec::new();
+        for _ in 0..40 {
+            let tip = Point3::new(0.5 + 0.3 * next(), 0.4 * next(), 0.3 + 0.1 * next());
+            let Some(start) = arm.tool_down_ik(
+                &base,
+                tip,
+                next(),
+                suction,
+                &[0.0, -1.5, 1.5, -1.6, -1.6, 0.0],
+            ) else {
+                continue;
+            };
+            let wander: Vec<[f32; 3]> = (0..MAX_POLICY_STEPS)
+                .map(|_| {
+                    [
+                        0.1 * next() as f32,
+                        0.1 * next() as f32,
+                        0.1 * next() as f32,
+                    ]
+                })
+                .collect();
+            // The elbow bends on until it leaves its limits.
+            let bend: Vec<[f32; 3]> = wander.iter().map(|a| [a[0], a[1], 0.1]).collect();
+            // A goal out of reach, and the tip after a few of the actions.
+            let mut after = start;
+            for a in &wander[..5] {
+                after =
+                    cup_down(&arm, &base, &after, record::clip(a.map(f64::from))).unwrap_or(after);
+            }
+            let near: [f64; 3] = arm.tool_tip(&base, &after, suction).coords.into();
+            let far = [3.0, 0.0, 0.5];
+            for (actions, goal, tolerance) in [
+                (&wander, far, 0.01),
+                (&wander, near, 1e-9),
+                (&bend, far, 0.01),
+            ] {
+                let run = |stepper: Stepper| {
+                    let mut k = 0;
+                    let result =
+                        stepper(&arm, &base, suction, start, goal, tolerance, &mut |_, _| {
+                            k += 1;
+                            actions[k - 1]
+                        });
+                    // Debug prints each value exactly (NaN included).
+                    format!("{result:?}")
+                };
+                let (new, old) = (run(policy_steps), run(steps_by_separate_poses));
+                assert_eq!(new, old);
+                outcomes.push(new.chars().take(8).collect::<String>());
+            }
+        }
+        // Each way of ending was met.
+        for ending in ["Ok(", "Err(Shor", "Err(Limi"] {
+            assert!(
+                outcomes.iter().any(|o| o.starts_with(ending)),
+                "no {ending} among {outcomes:?}"
+            );
+        }
+    }
 }
