@@ -82,8 +82,14 @@ fn the_commanded_stream_equals_the_simulators_for_the_same_plan() {
         world: ep.simulator(start).expect("a twin"),
         suction: false,
     };
-    let mut world = Ur10World::connect(&robot::settings(&ep, &address), Box::new(twin))
-        .expect("connects to the fake");
+    // Half a second of silence before a stall and before the watchdog
+    // trips (50 ms each on a robot): a driver thread starved for 52 ms by
+    // other tests on a loaded 2-core machine was once taken for a stalled
+    // link. The commands compared are the same either way.
+    let mut settings = robot::settings(&ep, &address);
+    settings.stall_periods = 250;
+    settings.watchdog_hz = 2.0;
+    let mut world = Ur10World::connect(&settings, Box::new(twin)).expect("connects to the fake");
     let report = execute::run(&mut world, &ep.arm, &ep.task, &Planner::Expert);
     assert_eq!(world.close(), None, "no fault");
     assert!(report.complete, "{report:?}");

@@ -496,6 +496,9 @@ fn serve_rtde(inner: &Inner, mut stream: TcpStream) {
     let mut framer = Framer::new();
     let mut outputs: Option<(f64, Vec<FieldType>)> = None;
     let mut inputs: Option<(Vec<String>, Vec<FieldType>)> = None;
+    // Whether this client has sent inputs: only a client that feeds the
+    // program moves the test clock (below).
+    let mut fed = false;
     let idle = Instant::now();
     while !inner.stopping() && idle.elapsed() < Duration::from_secs(30) {
         let packet = match next_packet(&mut stream, &mut framer) {
@@ -562,7 +565,14 @@ fn serve_rtde(inner: &Inner, mut stream: TcpStream) {
                     break;
                 }
                 if let (true, Some(out)) = (ok, &outputs) {
-                    match stream_data(inner, &mut stream, &mut framer, out, inputs.as_ref()) {
+                    match stream_data(
+                        inner,
+                        &mut stream,
+                        &mut framer,
+                        out,
+                        inputs.as_ref(),
+                        &mut fed,
+                    ) {
                         Streamed::Paused => {
                             let _ =
                                 send(&mut stream, &Packet::PauseReply { accepted: true }, config);
@@ -584,12 +594,17 @@ fn serve_rtde(inner: &Inner, mut stream: TcpStream) {
             break;
         }
     }
-    // The client is gone: the robot's clock goes on for a second, so the
-    // watchdog stops a program nobody feeds.
-    let dt = 1.0 / config.version.frequency();
-    let mut r = inner.robot();
-    for _ in 0..(config.version.frequency() as usize) {
-        r.tick(dt, config.time_constant);
+    // The client that fed the program is gone: the robot's clock goes on
+    // for a second, so the watchdog stops a program nobody feeds. A client
+    // that only read the state (a second driver refused because a program
+    // plays) leaves the clock to the one that feeds it, as on a real
+    // controller, whose clock does not wait for any client.
+    if fed {
+        let dt = 1.0 / config.version.frequency();
+        let mut r = inner.robot();
+        for _ in 0..(config.version.frequency() as usize) {
+            r.tick(dt, config.time_constant);
+        }
     }
 }
 
@@ -628,13 +643,17 @@ enum Streamed {
 }
 
 /// The data stream: a package per tick of the test clock, the client's
-/// inputs applied as they come, faults injected.
+/// inputs applied as they come, faults injected. The clock ticks only once
+/// the client has fed inputs (`fed`): a client that only reads the state
+/// must not run a clock that another client's program is fed by, or the
+/// other program's watchdog would see time pass without its feed.
 fn stream_data(
     inner: &Inner,
     stream: &mut TcpStream,
     framer: &mut Framer,
     (_, types): &(f64, Vec<FieldType>),
     inputs: Option<&(Vec<String>, Vec<FieldType>)>,
+    fed: &mut bool,
 ) -> Streamed {
     let config = &inner.config;
     let dt = 1.0 / config.version.frequency();
@@ -645,7 +664,9 @@ fn stream_data(
         n += 1;
         let (bytes, muted, drop_now) = {
             let mut r = inner.robot();
-            r.tick(dt, config.time_constant);
+            if *fed {
+                r.tick(dt, config.time_constant);
+            }
             let injected = r.injected;
             let muted = injected && matches!(config.inject, Some(Injected::Stall { .. }));
             let drop_now = injected && matches!(config.inject, Some(Injected::DropSocket { .. }));
@@ -695,6 +716,7 @@ fn stream_data(
                         && let Ok(values) = decode_values(t, &payload)
                     {
                         inner.robot().input(names, &values, config.inject);
+                        *fed = true;
                     }
                     if !muted {
                         break;

@@ -30,10 +30,9 @@ fn settings(fake: &FakeController) -> Settings {
     // a loaded test machine does not look like a stalled link.
     s.stall_periods = 250;
     // For the same reason the controller's watchdog allows half a second
-    // without a fed register (50 ms by default): a driver thread starved
-    // by other tests on 2 cores tripped it once in CI-like runs
-    // (`a_program_already_playing_is_not_replaced`). The watchdog tests
-    // still see it trip (they wait up to 5 s).
+    // without a fed register (50 ms by default): the fake's clock keeps
+    // ticking at its pace while a starved driver thread sends nothing. The
+    // watchdog tests still see it trip (they wait up to 5 s).
     s.watchdog_hz = 2.0;
     s
 }
@@ -483,6 +482,10 @@ fn a_program_already_playing_is_not_replaced() {
     let e = Ur10World::connect(&settings(&fake), Box::new(NoProducts)).unwrap_err();
     assert!(matches!(e, UrError::ProgramRunning), "{e}");
     assert_eq!(fake.record().scripts.len(), 1);
+    // The refused driver has gone; the first one's program still plays,
+    // fed by it (the fake's clock once ran on for the one that left, and
+    // the watchdog stopped the program that was still fed).
+    std::thread::sleep(Duration::from_millis(300));
     assert_eq!(world.close(), None);
 }
 
