@@ -72,8 +72,8 @@ impl Dense {
     /// gives each row: every output gets the same products added in the
     /// same order, the inputs that are 0 skipped. A block of outputs of
     /// every row stays in registers while the inputs pass, so no output is
-    /// stored until its block is done and each weight is read once per
-    /// block, not once per row; with AVX2 the blocks are twice as wide.
+    /// stored until its block is done and the rows share one walk over the
+    /// weights; with AVX2 the blocks are twice as wide.
     fn apply_rows<const R: usize>(&self, x: [&[f32]; R], y: [&mut [f32]; R]) {
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
@@ -418,7 +418,7 @@ impl DynamicsWeights {
     ///
     /// Both rows go through the layers together ([`Dense::apply_rows`]):
     /// a policy step is two passes over the same weights, and this is the
-    /// learned planner's inner loop (some thirty steps per sub-goal).
+    /// learned planner's inner loop (up to 60 steps per sub-goal).
     pub fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
         let moved = action_input(delta, joints);
         let mut still = moved;
