@@ -160,7 +160,8 @@ fn eval_reports_every_planner_of_a_suite() {
 /// The bundled model serves cells it was not taught: `execute` on a
 /// generated cell (seed 1003, one of the family's reporting seeds; the
 /// bundled model learned from seeds 5000 to 5015 and line2) uses it by
-/// default, says so on stderr, and packs the order.
+/// default, says so on stderr, follows the order the cell's own
+/// demonstrations show, and packs the order.
 #[test]
 fn the_bundled_model_packs_a_cell_it_was_not_taught() {
     let dir = scratch("learning", "untaught");
@@ -184,6 +185,12 @@ fn the_bundled_model_packs_a_cell_it_was_not_taught() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         stderr.contains("the model was not taught cell `gen_1003`"),
+        "{stderr}"
+    );
+    // gen_1003 is taught in descending order in its file; the bundled
+    // model was taught ascending, and follows the file.
+    assert!(
+        stderr.contains("demonstrations of cell `gen_1003` follow the order descending"),
         "{stderr}"
     );
     let run: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");

@@ -32,6 +32,9 @@ pub enum PipelineError {
     NoStartPose { cell: String },
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// Expanding a clean compilation's demonstrations failed.
+    #[error(transparent)]
+    Compile(#[from] packwright_compiler::Error),
     #[error("{what}: {source}")]
     Model { what: String, source: ModelError },
     /// Demonstrations that follow no one sequence rule.

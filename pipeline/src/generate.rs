@@ -962,4 +962,47 @@ mod tests {
             }
         }
     }
+
+    /// The rule a cell's own demonstrations follow is read from its file
+    /// (what a model not taught the cell packs it in): each of the three,
+    /// and none for a cell without demonstrations.
+    #[test]
+    fn a_cells_rule_is_read_from_its_demonstrations() {
+        use crate::teach::cell_rule;
+        use packwright_interface::SequenceRule;
+        for (rule, seed) in [
+            (Sequence::Ascending, 3),
+            (Sequence::Descending, 3),
+            (Sequence::Listed, 4),
+        ] {
+            let g = family_cell_taught(seed, Some(rule));
+            let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
+            let compiled = check(
+                &loader,
+                &[PathBuf::from(g.file_name())],
+                &crate::reach::RobotWorkspace::new(),
+            )
+            .expect("compiles");
+            let inferred = cell_rule(&compiled, &g.name)
+                .expect("one rule")
+                .expect("demonstrations");
+            // A listed order is read as far as the demonstrations show it:
+            // two products no demonstration handled together may come in
+            // either order.
+            match (rule, &inferred.rule) {
+                (Sequence::Ascending, SequenceRule::Ascending)
+                | (Sequence::Descending, SequenceRule::Descending) => {}
+                (Sequence::Listed, SequenceRule::Listed(list)) => {
+                    assert_eq!(list.len(), g.products.len(), "seed {seed}");
+                }
+                other => panic!("seed {seed}: {other:?}"),
+            }
+            assert!(inferred.exceptions.is_empty(), "seed {seed}");
+            assert!(
+                cell_rule(&compiled, "elsewhere")
+                    .expect("no error")
+                    .is_none()
+            );
+        }
+    }
 }

@@ -2,7 +2,8 @@
 //! compiled into the binary), and which planner packs a cell.
 
 use crate::error::{PipelineError, Result};
-use packwright_interface::PlannerKind;
+use packwright_compiler::Compiled;
+use packwright_interface::{PlannerKind, SequenceRule};
 use packwright_nets::{FILES, Networks};
 use std::path::Path;
 
@@ -67,6 +68,38 @@ pub fn choose_planner(
         (None, None) => PlannerKind::Expert,
     };
     Ok((planner, nets))
+}
+
+/// What [`follow_cell_rule`] did.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CellRule {
+    /// The model was taught the cell, or the compilation holds no
+    /// demonstration of it, or they follow the model's own rule: the
+    /// model's rule is kept.
+    Kept,
+    /// The model now follows the rule the cell's demonstrations show.
+    Followed(SequenceRule),
+    /// The cell's demonstrations follow no one rule (the reason): the
+    /// model's rule is kept.
+    NoRule(String),
+}
+
+/// Makes `nets`, on `cell` of `compiled` which it was not taught, follow
+/// the sequence rule that the compilation's demonstrations of that cell
+/// show ([`crate::teach::cell_rule`]), so that a model serving many cells
+/// packs each in the order its own file teaches.
+pub fn follow_cell_rule(nets: &mut Networks, compiled: &Compiled, cell: &str) -> CellRule {
+    if taught(nets, cell) {
+        return CellRule::Kept;
+    }
+    match crate::teach::cell_rule(compiled, cell) {
+        Ok(Some(inferred)) if inferred.rule != nets.task.sequence => {
+            nets.task.sequence = inferred.rule.clone();
+            CellRule::Followed(inferred.rule)
+        }
+        Ok(_) => CellRule::Kept,
+        Err(e) => CellRule::NoRule(e.to_string()),
+    }
 }
 
 /// Whether `nets` was taught demonstrations in `cell`.

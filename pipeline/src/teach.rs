@@ -8,6 +8,7 @@ use crate::episode::{Episode, demonstration_episode};
 use crate::error::{PipelineError, Result};
 use crate::replay::{motion_examples, replay_all};
 use packwright_compiler::artifact::{DemonstrationRecord, WorldFile};
+use packwright_compiler::{Compiled, emit};
 use packwright_interface::record::MotionLog;
 use packwright_interface::{Graph, SequenceRule, world::Seen};
 use packwright_motion::execute::demonstrated_decisions;
@@ -228,6 +229,25 @@ pub struct Inferred {
     /// reported by `train`, and their decisions left out of the reasoner's
     /// examples.
     pub exceptions: Vec<usize>,
+}
+
+/// The sequence rule the demonstrations of `cell` in a compilation
+/// follow, or `None` when it holds none of that cell: the order a model
+/// that was not taught the cell packs it in (`execute`, `eval`). Its
+/// reasoner learned "the first selected product along the chain not yet
+/// in its slot", which is the same function for any rule, so the rule can
+/// come from the cell's own file without training. An error when those
+/// demonstrations follow no one rule.
+pub fn cell_rule(compiled: &Compiled, cell: &str) -> Result<Option<Inferred>> {
+    let demos: Vec<DemonstrationRecord> =
+        emit::demonstration_records(&compiled.model, &compiled.expanded)?
+            .into_iter()
+            .filter(|d| d.cell == cell)
+            .collect();
+    if demos.is_empty() {
+        return Ok(None);
+    }
+    sequence_rule(&emit::world_file(&compiled.model), &demos).map(Some)
 }
 
 /// Whether `sequence` (product names) follows `rule` in `inventory`

@@ -14,7 +14,7 @@ use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
 use packwright_pipeline::episode::{cell_of, episode};
 use packwright_pipeline::evaluate::{CaseResult, Row, Run, markdown, run_case};
-use packwright_pipeline::models::{choose_planner, taught};
+use packwright_pipeline::models::{choose_planner, follow_cell_rule, taught};
 use packwright_pipeline::reach::RobotWorkspace;
 use packwright_recording::{Journal, JournalPolicy, JournalWorld};
 use rayon::prelude::*;
@@ -83,6 +83,8 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
     }
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
+    // The cells whose order has been noted (once per cell).
+    let mut noted = std::collections::BTreeSet::new();
     let mut all_results = Vec::new();
     for suite in suites {
         let Some(first) = suite.cases.first() else {
@@ -91,7 +93,15 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
         let cell = cell_of(&compiled, &first.setup);
         let learned = choose_planner(Some(PlannerKind::Learned), args.model.as_deref());
         let nets = match learned {
-            Ok((_, nets)) => nets,
+            Ok((_, mut nets)) => {
+                if let Some(n) = &mut nets {
+                    let rule = follow_cell_rule(n, &compiled, &cell);
+                    if noted.insert(cell.clone()) {
+                        super::execute::note_cell_rule(&cell, &rule);
+                    }
+                }
+                nets
+            }
             Err(e) => {
                 errln!("{}: no learned planner ({e})", suite.name);
                 skipped.push(Skipped {

@@ -12,7 +12,7 @@ use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
 use packwright_nets::features::{node_rows, slot_rows};
 use packwright_pipeline::episode::{Episode, episode, find_setup};
-use packwright_pipeline::models::{choose_planner, taught};
+use packwright_pipeline::models::{CellRule, choose_planner, follow_cell_rule, taught};
 use packwright_pipeline::reach::RobotWorkspace;
 use packwright_pipeline::robot::{self, Products};
 use packwright_recording::{Journal, JournalPolicy, JournalWorld, Run, Scores};
@@ -81,14 +81,18 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
     if args.dry_run && address.is_none() {
         anyhow::bail!("--dry-run needs a real robot: --robot ur10://HOST");
     }
-    let (kind, model) = choose_planner(args.planner, args.model.as_deref())?;
-    if let Some(nets) = &model
+    let (kind, mut model) = choose_planner(args.planner, args.model.as_deref())?;
+    if let Some(nets) = &mut model
         && !taught(nets, &ep.task.cell.name)
     {
         errln!(
             "note: the model was not taught cell `{}` ({}): it answers from this cell's geometry (see README, \"Learning\")",
             ep.task.cell.name,
             taught_cells(&nets.task.cells)
+        );
+        note_cell_rule(
+            &ep.task.cell.name,
+            &follow_cell_rule(nets, &compiled, &ep.task.cell.name),
         );
     }
     // With --record, the policy's decisions are journalled too.
@@ -319,6 +323,20 @@ fn print_report(name: &str, report: &Report, clock: &str) {
         for v in &report.violations {
             outln!("  the reasoner {v}: the arm stopped");
         }
+    }
+}
+
+/// Says on stderr which order a model packs an untaught cell in, when
+/// that cell's own demonstrations decided it ([`follow_cell_rule`]).
+pub fn note_cell_rule(cell: &str, what: &CellRule) {
+    match what {
+        CellRule::Kept => {}
+        CellRule::Followed(rule) => errln!(
+            "note: the file's demonstrations of cell `{cell}` follow the order {rule}: the learned planner packs it so"
+        ),
+        CellRule::NoRule(why) => errln!(
+            "note: the file's demonstrations of cell `{cell}` follow no one order ({why}): the model's own is kept"
+        ),
     }
 }
 

@@ -130,7 +130,7 @@ pub fn emit(
 ) -> Result<Vec<Written>, Error> {
     let mut written = vec![
         whole(out, file::LABELS, &json(&labels(m))?)?,
-        whole(out, file::ORDERS, &json(&world(m))?)?,
+        whole(out, file::ORDERS, &json(&world_file(m))?)?,
         whole(out, file::SCENARIOS, &json(&scenarios(m, ex))?)?,
     ];
     written.extend(demonstrations(m, ex, shape, out)?);
@@ -199,6 +199,16 @@ fn demonstrations(
             bytes,
         })?,
     ])
+}
+
+/// The demonstrations of `ex` as `demonstrations.jsonl` records, in
+/// memory, without their graph samples (`first_sample` and `samples` are
+/// 0): what a tool needs to read the demonstrated sequences without
+/// compiling to a directory.
+pub fn demonstration_records(m: &Model, ex: &Expanded) -> Result<Vec<DemonstrationRecord>, Error> {
+    ex.demonstrations(m)
+        .map(|d| d.map(|d| demonstration_record(m, &ex.blocks[d.block], &d, 0, 0)))
+        .collect()
 }
 
 fn demonstration_record(
@@ -405,7 +415,8 @@ pub fn cell_record(c: &Cell) -> CellRecord {
     }
 }
 
-fn world(m: &Model) -> WorldFile {
+/// `orders.json`: the cells, products, inventories and orders.
+pub fn world_file(m: &Model) -> WorldFile {
     WorldFile {
         schema: schema::ORDERS.into(),
         version: SCHEMA_VERSION,
