@@ -34,7 +34,7 @@ pub enum PipelineError {
     Sim(#[from] SimError),
     /// Expanding a clean compilation's demonstrations failed.
     #[error(transparent)]
-    Compile(#[from] packwright_compiler::Error),
+    Compile(Box<packwright_compiler::Error>),
     #[error("{what}: {source}")]
     Model { what: String, source: ModelError },
     /// Demonstrations that follow no one sequence rule.

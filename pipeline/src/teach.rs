@@ -240,7 +240,8 @@ pub struct Inferred {
 /// demonstrations follow no one rule.
 pub fn cell_rule(compiled: &Compiled, cell: &str) -> Result<Option<Inferred>> {
     let demos: Vec<DemonstrationRecord> =
-        emit::demonstration_records(&compiled.model, &compiled.expanded)?
+        emit::demonstration_records(&compiled.model, &compiled.expanded)
+            .map_err(|e| PipelineError::Compile(Box::new(e)))?
             .into_iter()
             .filter(|d| d.cell == cell)
             .collect();
