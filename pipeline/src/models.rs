@@ -79,9 +79,9 @@ pub enum CellRule {
     Kept,
     /// The model now follows the rule the cell's demonstrations show.
     Followed(SequenceRule),
-    /// The cell's demonstrations follow no one rule (the reason): the
-    /// model's rule is kept.
-    NoRule(String),
+    /// The cell's demonstrations follow no one rule (as `sequence random`
+    /// teaches): the model's rule is kept.
+    NoRule,
 }
 
 /// Makes `nets`, on `cell` of `compiled` which it was not taught, follow
@@ -98,7 +98,7 @@ pub fn follow_cell_rule(nets: &mut Networks, compiled: &Compiled, cell: &str) ->
             CellRule::Followed(inferred.rule)
         }
         Ok(_) => CellRule::Kept,
-        Err(e) => CellRule::NoRule(e.to_string()),
+        Err(_) => CellRule::NoRule,
     }
 }
 

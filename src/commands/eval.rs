@@ -97,7 +97,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
                 if let Some(n) = &mut nets {
                     let rule = follow_cell_rule(n, &compiled, &cell);
                     if noted.insert(cell.clone()) {
-                        super::execute::note_cell_rule(&cell, &rule);
+                        super::execute::note_cell_rule(&cell, &rule, &n.task.sequence);
                     }
                 }
                 nets

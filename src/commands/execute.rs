@@ -7,7 +7,7 @@ use crate::commands::draw::write_executed_svg;
 use crate::fsio::FsLoader;
 use packwright_interface::outcome::{Outcome, PlannerKind, Report};
 use packwright_interface::world::World;
-use packwright_interface::{Graph, Policy};
+use packwright_interface::{Graph, Policy, SequenceRule};
 use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
 use packwright_nets::features::{node_rows, slot_rows};
@@ -90,10 +90,8 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
             ep.task.cell.name,
             taught_cells(&nets.task.cells)
         );
-        note_cell_rule(
-            &ep.task.cell.name,
-            &follow_cell_rule(nets, &compiled, &ep.task.cell.name),
-        );
+        let rule = follow_cell_rule(nets, &compiled, &ep.task.cell.name);
+        note_cell_rule(&ep.task.cell.name, &rule, &nets.task.sequence);
     }
     // With --record, the policy's decisions are journalled too.
     let journal = Journal::new();
@@ -328,14 +326,14 @@ fn print_report(name: &str, report: &Report, clock: &str) {
 
 /// Says on stderr which order a model packs an untaught cell in, when
 /// that cell's own demonstrations decided it ([`follow_cell_rule`]).
-pub fn note_cell_rule(cell: &str, what: &CellRule) {
+pub fn note_cell_rule(cell: &str, what: &CellRule, model_rule: &SequenceRule) {
     match what {
         CellRule::Kept => {}
         CellRule::Followed(rule) => errln!(
             "note: the file's demonstrations of cell `{cell}` follow the order {rule}: the learned planner packs it so"
         ),
-        CellRule::NoRule(why) => errln!(
-            "note: the file's demonstrations of cell `{cell}` follow no one order ({why}): the model's own is kept"
+        CellRule::NoRule => errln!(
+            "note: the file's demonstrations of cell `{cell}` follow no one order: the model's own, {model_rule}, is kept"
         ),
     }
 }
