@@ -1004,5 +1004,20 @@ mod tests {
                     .is_none()
             );
         }
+        // Demonstrations in random orders teach no rule: an error, which
+        // `execute` and `eval` answer by keeping the model's rule.
+        let g = family_cell_taught(3, Some(Sequence::Ascending));
+        let text = g
+            .text
+            .replace("  sequence ascending\n", "  sequence random\n");
+        assert_ne!(text, g.text);
+        let loader = MemoryLoader::new().with(g.file_name(), text);
+        let compiled = check(
+            &loader,
+            &[PathBuf::from(g.file_name())],
+            &crate::reach::RobotWorkspace::new(),
+        )
+        .expect("compiles");
+        assert!(cell_rule(&compiled, &g.name).is_err());
     }
 }
