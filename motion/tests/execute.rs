@@ -133,12 +133,7 @@ fn planning_past_its_budget_stops_the_arm() {
     ];
     for (subgoal, package, which) in cases {
         let (_, task, _) = episode(&assign, &[], &[]);
-        let policy = Scripted {
-            task,
-            wrong_pick: None,
-            lost: false,
-            beside: false,
-        };
+        let policy = Scripted::new(task);
         let learned = Planner::Learned {
             policy: &policy,
             seed: 3,
@@ -369,20 +364,33 @@ impl Policy for Scripted {
     }
 }
 
+impl Scripted {
+    /// The demonstrated rule and the expert's geometry, nothing changed.
+    fn new(task: OrderTask) -> Scripted {
+        Scripted {
+            task,
+            wrong_pick: None,
+            lost: false,
+            beside: false,
+        }
+    }
+}
+
+/// `assign` packed on the bench cell by the learned loop with the policy
+/// `make` builds for the task.
+fn learned_with(assign: &[(&str, &str)], make: impl FnOnce(OrderTask) -> Scripted) -> Report {
+    let (arm, task, mut sim) = episode(assign, &[], &[]);
+    let policy = make(task.clone());
+    run_learned(&mut sim, &arm, &task, &policy)
+}
+
 /// A dynamics policy that does not move reaches no sub-goal: every stage
 /// is handed to RRT-Connect at its first sub-goal, counted with the
 /// distance left, and the package is still packed.
 #[test]
 fn the_learned_loop_falls_back_to_rrt_connect_and_says_why() {
     let assign = [("A", "g1"), ("D", "g5")];
-    let (arm, task, mut sim) = episode(&assign, &[], &[]);
-    let policy = Scripted {
-        task: task.clone(),
-        wrong_pick: None,
-        lost: false,
-        beside: false,
-    };
-    let report = run_learned(&mut sim, &arm, &task, &policy);
+    let report = learned_with(&assign, Scripted::new);
     assert_packed(&report);
     assert!(report.violations.is_empty(), "{:?}", report.violations);
     // Two stages per product, each falling back at its first sub-goal.
@@ -418,14 +426,10 @@ fn the_learned_loop_falls_back_to_rrt_connect_and_says_why() {
 #[test]
 fn a_fallback_goes_to_the_experts_sub_goal_when_the_learned_one_is_out_of_reach() {
     let assign = [("A", "g1"), ("D", "g5")];
-    let (arm, task, mut sim) = episode(&assign, &[], &[]);
-    let policy = Scripted {
-        task: task.clone(),
-        wrong_pick: None,
+    let report = learned_with(&assign, |task| Scripted {
         lost: true,
-        beside: false,
-    };
-    let report = run_learned(&mut sim, &arm, &task, &policy);
+        ..Scripted::new(task)
+    });
     assert_packed(&report);
     assert!(report.violations.is_empty(), "{:?}", report.violations);
     assert_eq!(
@@ -443,14 +447,7 @@ fn a_fallback_goes_to_the_experts_sub_goal_when_the_learned_one_is_out_of_reach(
         );
     }
     // With sub-goals in reach, no fallback goes to the expert's.
-    let (arm, task, mut sim) = episode(&assign, &[], &[]);
-    let policy = Scripted {
-        task: task.clone(),
-        wrong_pick: None,
-        lost: false,
-        beside: false,
-    };
-    let report = run_learned(&mut sim, &arm, &task, &policy);
+    let report = learned_with(&assign, Scripted::new);
     assert!(report.fallbacks.iter().all(|f| f.expert_from.is_none()));
 }
 
@@ -460,14 +457,10 @@ fn a_fallback_goes_to_the_experts_sub_goal_when_the_learned_one_is_out_of_reach(
 #[test]
 fn a_release_off_the_slot_is_not_tried() {
     let assign = [("A", "g1"), ("D", "g5")];
-    let (arm, task, mut sim) = episode(&assign, &[], &[]);
-    let policy = Scripted {
-        task: task.clone(),
-        wrong_pick: None,
-        lost: false,
+    let report = learned_with(&assign, |task| Scripted {
         beside: true,
-    };
-    let report = run_learned(&mut sim, &arm, &task, &policy);
+        ..Scripted::new(task)
+    });
     assert_packed(&report);
     let releases: Vec<_> = report
         .fallbacks
@@ -486,14 +479,10 @@ fn a_release_off_the_slot_is_not_tried() {
 /// order: the violation is reported and the arm stops before moving.
 #[test]
 fn a_decision_against_the_order_stops_the_arm() {
-    let (arm, task, mut sim) = episode(&[("A", "g1"), ("D", "g5")], &[], &[]);
-    let policy = Scripted {
-        task: task.clone(),
+    let report = learned_with(&[("A", "g1"), ("D", "g5")], |task| Scripted {
         wrong_pick: Some(1),
-        lost: false,
-        beside: false,
-    };
-    let report = run_learned(&mut sim, &arm, &task, &policy);
+        ..Scripted::new(task)
+    });
     assert!(!report.complete);
     assert_eq!(
         report.violations,
