@@ -14,7 +14,7 @@ use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
 use packwright_pipeline::episode::{cell_of, episode};
 use packwright_pipeline::evaluate::{CaseResult, Row, Run, markdown, run_case};
-use packwright_pipeline::models::{choose_planner, follow_cell_rule, taught};
+use packwright_pipeline::models::{CellRule, choose_planner, follow_cell_rule, taught};
 use packwright_pipeline::reach::RobotWorkspace;
 use packwright_recording::{Journal, JournalPolicy, JournalWorld};
 use rayon::prelude::*;
@@ -83,8 +83,9 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
     }
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
-    // The cells whose order has been noted (once per cell).
-    let mut noted = std::collections::BTreeSet::new();
+    // The order each cell's own demonstrations teach a model that was not
+    // taught the cell (`follow_cell_rule`).
+    let mut cell_rules = std::collections::BTreeMap::new();
     let mut all_results = Vec::new();
     for suite in suites {
         let Some(first) = suite.cases.first() else {
@@ -95,9 +96,16 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
         let nets = match learned {
             Ok((_, mut nets)) => {
                 if let Some(n) = &mut nets {
-                    let rule = follow_cell_rule(n, &compiled, &cell);
-                    if noted.insert(cell.clone()) {
-                        super::execute::note_cell_rule(&cell, &rule, &n.task.sequence);
+                    // Read once per cell (and said once), applied to every
+                    // suite of the cell.
+                    match cell_rules.get(&cell) {
+                        Some(CellRule::Followed(rule)) => n.task.sequence = rule.clone(),
+                        Some(_) => {}
+                        None => {
+                            let rule = follow_cell_rule(n, &compiled, &cell);
+                            super::execute::note_cell_rule(&cell, &rule, &n.task.sequence);
+                            cell_rules.insert(cell.clone(), rule);
+                        }
                     }
                 }
                 nets
