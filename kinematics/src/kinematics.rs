@@ -65,7 +65,13 @@ impl Arm {
 
     /// World position of the cup tip, `suction` metres along the flange z axis.
     pub fn tool_tip(&self, base: &Isometry3<f64>, q: &Joints, suction: f64) -> Point3<f64> {
-        self.flange_pose(base, q) * Point3::new(0.0, 0.0, suction)
+        Arm::tip_of(&self.flange_pose(base, q), suction)
+    }
+
+    /// The cup tip of a flange at `flange`, `suction` metres along its z
+    /// axis: [`Arm::tool_tip`] for a caller that has the flange pose.
+    pub fn tip_of(flange: &Isometry3<f64>, suction: f64) -> Point3<f64> {
+        flange * Point3::new(0.0, 0.0, suction)
     }
 
     /// Joints that put the cup tip at `tip`, pointing straight down, with the

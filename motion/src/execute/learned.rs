@@ -19,7 +19,7 @@ use super::station::{
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
-use nalgebra::{Isometry3, Point3, Vector3};
+use nalgebra::{Isometry3, Vector3};
 use packwright_interface::outcome::{
     Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, Violation,
 };
@@ -123,8 +123,8 @@ pub fn policy_steps(
     let mut flange = arm.flange_pose(base, &q);
     let mut steps = Vec::new();
     loop {
-        // `Arm::tool_tip`, from the flange pose the step computed.
-        let tip: [f64; 3] = (flange * Point3::new(0.0, 0.0, suction)).coords.into();
+        // From the flange pose the step computed.
+        let tip: [f64; 3] = Arm::tip_of(&flange, suction).coords.into();
         let delta: [f64; 3] = std::array::from_fn(|j| goal[j] - tip[j]);
         let away = delta.iter().map(|d| d * d).sum::<f64>().sqrt();
         if away <= tolerance {
@@ -753,6 +753,7 @@ pub(super) fn run<W: World>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::Point3;
 
     /// A way of stepping the policy, with the signature of [`policy_steps`].
     type Stepper = fn(
