@@ -7,7 +7,9 @@ pub enum ModelError {
     /// `config.json` is not JSON of the expected shape.
     #[error("config.json: {reason}")]
     Config { reason: String },
-    #[error("config.json has schema {found:?}, this packwright reads {expected:?}")]
+    #[error(
+        "config.json has schema {found:?}, this packwright reads {expected:?}: train the model again with this packwright (`packwright train`)"
+    )]
     Schema {
         found: String,
         expected: &'static str,

@@ -25,7 +25,7 @@
 use packwright_interface::{Graph, Stage, SubGoalQuery};
 
 /// Scale of the dynamics policy's outputs: actions are learnt as fractions
-/// of the largest joint step (5 degrees).
+/// of the largest joint step (15 degrees).
 pub const ACTION_SCALE: f32 = packwright_interface::record::MAX_ACTION as f32;
 
 /// Inputs per node: selected (0/1), place along the chain (0 for the first
@@ -96,7 +96,7 @@ pub struct ActionExample {
     pub delta: [f32; 3],
     /// Base, shoulder and elbow positions when the action was taken.
     pub joints: [f32; 3],
-    /// Base, shoulder and elbow steps (radians, at most 5 degrees each).
+    /// Base, shoulder and elbow steps (radians, at most 15 degrees each).
     pub action: [f32; 3],
 }
 

@@ -454,7 +454,7 @@ impl DynamicsWeights {
     ///
     /// Both rows go through the layers together ([`Dense::apply_rows`]):
     /// a policy step is two passes over the same weights, and this is the
-    /// learned planner's inner loop (up to 60 steps per sub-goal).
+    /// learned planner's inner loop (up to 30 steps per sub-goal).
     pub fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
         let moved = action_input(delta, joints);
         let mut still = moved;

@@ -161,7 +161,7 @@ pub fn subgoal_batch(examples: &[&SubGoalExample], device: &Device) -> (Tensor<2
     )
 }
 
-/// Inputs [B, ACTION_INPUTS] and targets (action / 5 degrees) [B, 3].
+/// Inputs [B, ACTION_INPUTS] and targets (action / 15 degrees) [B, 3].
 pub fn action_batch(examples: &[&ActionExample], device: &Device) -> (Tensor<2>, Tensor<2>) {
     let mut x = Vec::with_capacity(examples.len() * ACTION_INPUTS);
     let mut y = Vec::with_capacity(examples.len() * 3);

@@ -286,7 +286,7 @@ impl SubGoalPlanner {
 }
 
 /// The dynamics policy: (delta, shoulder, elbow) -> joint steps, as
-/// fractions of 5 degrees. The output at delta = 0 is subtracted, so a
+/// fractions of the largest step (15 degrees). The output at delta = 0 is subtracted, so a
 /// reached sub-goal asks for no motion.
 #[derive(Module, Debug)]
 pub struct DynamicsPolicy {

@@ -6,7 +6,7 @@
 //! "Decisions"). [`ExpertCoach`] rolls the policy out with forward
 //! kinematics from every demonstrated sub-goal start towards the
 //! demonstrated sub-goal through the learned loop's own stepping
-//! (`packwright_motion::execute::policy_steps`: clipped to 5 degrees, the
+//! (`packwright_motion::execute::policy_steps`: clipped to 15 degrees, the
 //! wrist keeping the cup down), and labels each state it visits with the
 //! expert's action there: the straight joint-space step towards the joints
 //! the expert reached the sub-goal with.

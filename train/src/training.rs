@@ -102,8 +102,8 @@ pub enum TrainError {
 /// The sub-goal planner's mean is fitted in units of this (m).
 const MEAN_SCALE: f64 = 0.01;
 
-/// Squared action size (in units of 5 degrees) below which the dynamics
-/// loss stops growing relative: 0.05 is a quarter of a degree.
+/// Squared action size (in units of the largest step, 15 degrees) below
+/// which the dynamics loss stops growing relative: 0.05 is 0.75 degrees.
 const RELATIVE_FLOOR: f64 = 0.05 * 0.05;
 
 fn split(n: usize, holdout: f64, rng: &mut ChaCha8Rng) -> (Vec<usize>, Vec<usize>) {

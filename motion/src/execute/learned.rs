@@ -2,7 +2,7 @@
 //! reasoner chooses (a product or the box, and the label) from the
 //! products' positions alone; the sub-goal planner proposes each of the
 //! stage's three sub-goals; the dynamics policy steps towards it (at most
-//! [`MAX_POLICY_STEPS`] steps of at most 5 degrees, the wrist keeping the
+//! [`MAX_POLICY_STEPS`] steps of at most 15 degrees, the wrist keeping the
 //! cup down). A rollout that does not reach its sub-goal, or whose motion
 //! would collide, hands the rest of the stage to RRT-Connect (a
 //! [`Fallback`]), which goes to the learned sub-goals, or to the expert's
@@ -31,10 +31,11 @@ use std::time::Instant;
 /// Via points of the vertical retreat from a release, when the straight
 /// joint motion up would touch the box.
 const RETREAT_VIAS: usize = 5;
-/// Most dynamics-policy steps per sub-goal: a 180-degree swing takes 36
+/// Most dynamics-policy steps per sub-goal: a 180-degree swing takes 12
 /// full steps, and near 180 degrees, where both ways round are as short,
-/// the policy takes a few steps to commit to one.
-pub const MAX_POLICY_STEPS: usize = 60;
+/// the policy takes a few steps to commit to one; the last steps, near the
+/// sub-goal, are short.
+pub const MAX_POLICY_STEPS: usize = 30;
 /// A sub-goal where the suction switches (the cup on a product's top
 /// face, a release in a slot), or the one just before it (the hover, above
 /// the slot), is reached when the cup tip is this close (m): the motion
@@ -106,7 +107,7 @@ fn cup_down_from(
 /// The dynamics policy's steps from `start` towards the cup-tip position
 /// `goal`, with forward kinematics, as the learned loop takes them: at
 /// most [`MAX_POLICY_STEPS`], each `action(q, delta)` (base, shoulder,
-/// elbow, radians; delta = goal − cup tip) scaled down to 5 degrees, the
+/// elbow, radians; delta = goal − cup tip) scaled down to 15 degrees, the
 /// wrist keeping the cup down; until the tip is within `tolerance`. The
 /// joints after each step, or why the goal was not reached. DAgger's
 /// rollouts step through this too.
