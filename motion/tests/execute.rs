@@ -8,9 +8,10 @@ use common::bench_cell;
 use packwright_interface::OrderTask;
 use packwright_interface::Policy;
 use packwright_interface::outcome::{Outcome, Report, Shortfall, Stage, Violation};
+use packwright_interface::record;
 use packwright_interface::scene::{Placement, ProductSpec};
 use packwright_interface::{Choice, Graph, Node, SequenceRule, SubGoalQuery};
-use packwright_kinematics::Arm;
+use packwright_kinematics::{Arm, Joints};
 use packwright_motion::execute::{self, Planner};
 use packwright_motion::expert;
 use packwright_sim::Simulator;
@@ -276,9 +277,16 @@ fn a_worker_started_package_is_finished_and_missing_stock_waits() {
 /// A scripted stand-in for trained networks on the bench cell (products
 /// 5 cm tall): the demonstrated rule as the reasoner, the expert's
 /// geometry as the sub-goal planner, and a dynamics policy that never
-/// moves the arm.
+/// moves the arm (or, with `reaching`, the expert's steps).
 struct Scripted {
     task: OrderTask,
+    /// The dynamics policy takes the expert's steps (what it is trained
+    /// on): the cup-down joints at the base, shoulder and elbow given
+    /// (the wrist as the learned loop turns it from the start pose),
+    /// towards the inverse kinematics of the sub-goal nearest them.
+    reaching: Option<(Arm, Joints)>,
+    /// Propose the release this much lower (m).
+    release_lower: f64,
     /// Pick this product first, whatever the order says.
     wrong_pick: Option<usize>,
     /// Propose every sub-goal 3 m off, out of the arm's reach.
@@ -352,6 +360,9 @@ impl Policy for Scripted {
         if self.beside && q.stage == Stage::Placing && q.index == 2 {
             tip[1] += 0.05;
         }
+        if q.stage == Stage::Placing && q.index == 2 {
+            tip[2] -= self.release_lower;
+        }
         tip.map(|v| v as f32)
     }
 
@@ -359,8 +370,27 @@ impl Policy for Scripted {
         SequenceRule::Ascending
     }
 
-    fn action(&self, _delta: [f32; 3], _joints: [f32; 3]) -> [f32; 3] {
-        [0.0; 3]
+    fn action(&self, delta: [f32; 3], joints: [f32; 3]) -> [f32; 3] {
+        let Some((arm, start)) = &self.reaching else {
+            return [0.0; 3];
+        };
+        // The learned loop keeps q1 + q2 + q3, q4 and q5 - q0 as at the
+        // start (`execute::cup_down`).
+        let [q0, q1, q2] = joints.map(f64::from);
+        let q = [
+            q0,
+            q1,
+            q2,
+            start[1] + start[2] + start[3] - q1 - q2,
+            start[4],
+            start[5] - start[0] + q0,
+        ];
+        let base = nalgebra::Isometry3::translation(0.0, 0.0, 0.0);
+        let suction = self.task.cell.suction;
+        let tip = arm.tool_tip(&base, &q, suction);
+        let goal = tip + nalgebra::Vector3::from(delta.map(f64::from));
+        arm.yaw_free_tool_down_ik(&base, goal, suction, &q)
+            .map_or([0.0; 3], |g| record::action(&q, &g).map(|v| v as f32))
     }
 }
 
@@ -372,6 +402,18 @@ impl Scripted {
             wrong_pick: None,
             lost: false,
             beside: false,
+            reaching: None,
+            release_lower: 0.0,
+        }
+    }
+
+    /// [`Scripted::new`] with the expert's steps as its dynamics policy.
+    fn reaching(task: OrderTask) -> Scripted {
+        let arm = Arm::ur10();
+        let start = execute::home(&arm, &task.cell).expect("a start pose");
+        Scripted {
+            reaching: Some((arm, start)),
+            ..Scripted::new(task)
         }
     }
 }
@@ -472,6 +514,38 @@ fn a_release_off_the_slot_is_not_tried() {
         // The policy does not move, so placing falls back at sub-goal 1;
         // the release (3) is then the expert's.
         assert_eq!((f.subgoal, f.expert_from), (1, Some(3)), "{f}");
+    }
+}
+
+/// With the expert's steps as its dynamics policy, the learned loop packs
+/// without a fallback; a learned release 15 mm too low, whose motion would
+/// push the product into the tray's floor, is not raised until it is free
+/// (let go higher up, a product beside a wall drops off its slot): RRT-Connect
+/// goes to the expert's release, and the fallback says why.
+#[test]
+fn a_colliding_release_goes_to_the_experts() {
+    let assign = [("A", "g1"), ("D", "g5")];
+    let report = learned_with(&assign, Scripted::reaching);
+    assert_packed(&report);
+    assert!(report.fallbacks.is_empty(), "{:#?}", report.fallbacks);
+    let report = learned_with(&assign, |task| Scripted {
+        release_lower: 0.015,
+        ..Scripted::reaching(task)
+    });
+    assert_packed(&report);
+    assert_eq!(
+        report.fallbacks.len(),
+        assign.len(),
+        "{:#?}",
+        report.fallbacks
+    );
+    for f in &report.fallbacks {
+        assert_eq!(
+            (f.stage, f.subgoal, f.expert_from),
+            (Stage::Placing, 3, Some(3)),
+            "{f}"
+        );
+        assert!(matches!(f.why, Shortfall::Collides { .. }), "{f}");
     }
 }
 

@@ -143,6 +143,11 @@ pub fn policy_steps(
     }
 }
 
+/// Whether `rolled` is a release (`switch`) whose motion would collide.
+fn release_collides(switch: Suction, rolled: &Result<Route, Shortfall>) -> bool {
+    switch == Suction::Off && matches!(rolled, Err(Shortfall::Collides { .. }))
+}
+
 /// What stopped a learned run early.
 enum Halt {
     Violation(Violation),
@@ -395,6 +400,7 @@ impl<W: World> Learned<'_, W> {
                 let mut rolled = self.rollout(start, goal, tolerance, load, &mut first_action_us);
                 let mut raised = 1;
                 while rolled.is_err()
+                    && !release_collides(switch, &rolled)
                     && raised <= MAX_RAISES
                     && !self.station.late()
                     && goal[2] + RAISE_STEP * f64::from(raised) <= ceiling
@@ -412,6 +418,12 @@ impl<W: World> Learned<'_, W> {
                 }
                 rolled
             });
+            // A release whose motion collides (the held product against a
+            // wall, a learned release a few millimetres off in a tight
+            // slot) is not raised and not tried by RRT-Connect either:
+            // let go higher up, the product would drop and land off its
+            // slot. The expert's release is used instead.
+            let colliding = rolled.as_ref().is_some_and(|r| release_collides(switch, r));
             let route = match rolled {
                 Some(Ok(route)) => route,
                 other => {
@@ -430,7 +442,7 @@ impl<W: World> Learned<'_, W> {
                         });
                     }
                     fallen = true;
-                    let target = off.is_none().then_some(SubGoal {
+                    let target = (off.is_none() && !colliding).then_some(SubGoal {
                         tip: goal,
                         suction: switch,
                     });
