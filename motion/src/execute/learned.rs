@@ -143,6 +143,14 @@ pub fn policy_steps(
     }
 }
 
+/// How far above the expert's release (m) a learned release whose motion
+/// collides may be raised: a learned release a little too low (the held
+/// product pressed into the floor) is let go 1 or 2 cm up, as the expert
+/// lets go 5 mm up; one beside a wall is not raised until it is clear of
+/// the wall (measured: released 9 cm up, a product dropped 29 mm off its
+/// slot).
+const COLLIDING_RELEASE_RAISE: f64 = 0.02;
+
 /// Whether `rolled` is a release (`switch`) whose motion would collide.
 fn release_collides(switch: Suction, rolled: &Result<Route, Shortfall>) -> bool {
     switch == Suction::Off && matches!(rolled, Err(Shortfall::Collides { .. }))
@@ -398,9 +406,16 @@ impl<W: World> Learned<'_, W> {
                 let mut first_action_us = None;
                 // The first attempt's shortfall is the one reported.
                 let mut rolled = self.rollout(start, goal, tolerance, load, &mut first_action_us);
+                // A release whose motion collides is raised only as far
+                // as one too low needs: up to COLLIDING_RELEASE_RAISE above
+                // the expert's.
+                let ceiling = if release_collides(switch, &rolled) {
+                    ceiling.min(plan.expert[k].tip[2] + COLLIDING_RELEASE_RAISE)
+                } else {
+                    ceiling
+                };
                 let mut raised = 1;
                 while rolled.is_err()
-                    && !release_collides(switch, &rolled)
                     && raised <= MAX_RAISES
                     && !self.station.late()
                     && goal[2] + RAISE_STEP * f64::from(raised) <= ceiling
@@ -418,11 +433,12 @@ impl<W: World> Learned<'_, W> {
                 }
                 rolled
             });
-            // A release whose motion collides (the held product against a
-            // wall, a learned release a few millimetres off in a tight
-            // slot) is not raised and not tried by RRT-Connect either:
-            // let go higher up, the product would drop and land off its
-            // slot. The expert's release is used instead.
+            // A release whose motion still collides (the held product
+            // against a wall: a learned release a few millimetres off in a
+            // tight slot) is not tried by RRT-Connect either, which would
+            // raise it until free: let go from higher up, the product
+            // would drop and land off its slot. The expert's release is
+            // used instead.
             let colliding = rolled.as_ref().is_some_and(|r| release_collides(switch, r));
             let route = match rolled {
                 Some(Ok(route)) => route,
