@@ -300,8 +300,6 @@ struct Scripted {
     wrong_pick: Option<usize>,
     /// Propose every sub-goal 3 m off, out of the arm's reach.
     lost: bool,
-    /// Propose the release 5 cm beside the slot, within reach.
-    beside: bool,
 }
 
 impl Policy for Scripted {
@@ -366,9 +364,6 @@ impl Policy for Scripted {
         if self.lost {
             tip[0] += 3.0;
         }
-        if self.beside && q.stage == Stage::Placing && q.index == 2 {
-            tip[1] += 0.05;
-        }
         if q.stage == Stage::Placing && q.index == 2 {
             (0..3).for_each(|j| tip[j] += self.release_offset[j]);
         }
@@ -394,7 +389,8 @@ impl Policy for Scripted {
             start[4],
             start[5] - start[0] + q0,
         ];
-        let base = nalgebra::Isometry3::translation(0.0, 0.0, 0.0);
+        let [x, y, z] = self.task.cell.base;
+        let base = nalgebra::Isometry3::translation(x, y, z);
         let suction = self.task.cell.suction;
         let tip = arm.tool_tip(&base, &q, suction);
         let goal = tip + nalgebra::Vector3::from(delta.map(f64::from));
@@ -410,7 +406,6 @@ impl Scripted {
             task,
             wrong_pick: None,
             lost: false,
-            beside: false,
             reaching: None,
             release_offset: [0.0; 3],
         }
@@ -518,7 +513,7 @@ fn a_fallback_goes_to_the_experts_sub_goal_when_the_learned_one_is_out_of_reach(
 fn a_release_off_the_slot_is_not_tried() {
     let assign = [("A", "g1"), ("D", "g5")];
     let report = learned_with(&assign, |task| Scripted {
-        beside: true,
+        release_offset: [0.0, 0.05, 0.0],
         ..Scripted::new(task)
     });
     assert_packed(&report);

@@ -512,9 +512,8 @@ mod tests {
         Dense::new(inputs, outputs, w, Some(b)).expect("shapes")
     }
 
-    /// Both block widths (SSE's and AVX2's, whichever this CPU would
-    /// take), one row or two, give the bits of one row at a time, on
-    /// widths that leave part of a block and inputs that are 0 or -0.
+    /// The vectorised `tanh` is within 4e-7 of the exact one on a grid
+    /// over [-12, 12] and at the extremes, odd, and NaN for NaN.
     #[test]
     fn tanh_is_within_4e_7_of_the_exact_one() {
         let xs: Vec<f32> = (-120_000..=120_000)
@@ -541,6 +540,9 @@ mod tests {
         assert!(nan[0].is_nan());
     }
 
+    /// Both block widths (SSE's and AVX2's, whichever this CPU would
+    /// take), one row or two, give the bits of one row at a time, on
+    /// widths that leave part of a block and inputs that are 0 or -0.
     #[test]
     fn blocked_rows_are_bit_identical_to_one_row_at_a_time() {
         for (seed, &(inputs, outputs)) in (0..200).zip([(64, 64), (5, 37), (68, 3)].iter().cycle())

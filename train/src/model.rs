@@ -286,8 +286,8 @@ impl SubGoalPlanner {
 }
 
 /// The dynamics policy: (delta, shoulder, elbow) -> joint steps, as
-/// fractions of the largest step (15 degrees). The output at delta = 0 is subtracted, so a
-/// reached sub-goal asks for no motion.
+/// fractions of the largest step (15 degrees). The output at delta = 0 is
+/// subtracted, so a reached sub-goal asks for no motion.
 #[derive(Module, Debug)]
 pub struct DynamicsPolicy {
     layers: Vec<Linear>,
