@@ -63,6 +63,23 @@ impl Arm {
         pose * self.flange
     }
 
+    /// Per joint, an upper bound (m) on how far the cup tip, `suction`
+    /// metres along the flange z axis, is from that joint's axis, in any
+    /// configuration: the lengths of the chain after the joint (each later
+    /// joint origin's offset, the flange's, the cup). So turning joint `j`
+    /// by `dq` moves the tip at most `radii[j] * |dq|`, and along any joint
+    /// path the tip moves at most `Σ radii[j] * |Δq[j]|` (the straight
+    /// joint segment from `a` to `b`: `radii · |b − a|`).
+    pub fn tip_radii(&self, suction: f64) -> [f64; DOF] {
+        let mut radii = [0.0; DOF];
+        let mut after = self.flange.translation.vector.norm() + suction.abs();
+        for j in (0..DOF).rev() {
+            radii[j] = after;
+            after += self.origins[j].translation.vector.norm();
+        }
+        radii
+    }
+
     /// World position of the cup tip, `suction` metres along the flange z axis.
     pub fn tool_tip(&self, base: &Isometry3<f64>, q: &Joints, suction: f64) -> Point3<f64> {
         Arm::tip_of(&self.flange_pose(base, q), suction)

@@ -247,3 +247,31 @@ proptest! {
         prop_assert!(a.rotation.angle_to(&b.rotation) < 1e-9);
     }
 }
+
+proptest! {
+    #![proptest_config(config(300))]
+    /// Along a straight joint segment, the cup tip never moves farther
+    /// than `Arm::tip_radii` allows, for any pair of points on it.
+    #[test]
+    fn tip_radii_bound_the_tip_motion(seed in any::<u64>(), suction in 0.0..0.3f64) {
+        let arm = Arm::ur10();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let radii = arm.tip_radii(suction);
+        let base = Isometry3::translation(0.1, -0.2, 0.8);
+        let a = random_joints(&arm, &mut rng);
+        let b = random_joints(&arm, &mut rng);
+        let along = |s: f64| -> Joints { std::array::from_fn(|j| a[j] + s * (b[j] - a[j])) };
+        let per_share: f64 = (0..DOF).map(|j| radii[j] * (b[j] - a[j]).abs()).sum();
+        for k in 0..16 {
+            let (s0, s1) = (k as f64 / 16.0, rng.random_range(0.0..1.0));
+            let moved = (arm.tool_tip(&base, &along(s1), suction)
+                - arm.tool_tip(&base, &along(s0), suction))
+            .norm();
+            prop_assert!(moved <= per_share * (s1 - s0).abs() + 1e-12,
+                "moved {moved} > bound {}", per_share * (s1 - s0).abs());
+        }
+        // Tight enough to be worth it: a whole turn of the base alone
+        // moves the tip across the arm's reach, not many times it.
+        prop_assert!(radii[0] < 2.5);
+    }
+}

@@ -6,7 +6,9 @@
 //! `valgrind --tool=callgrind target/release/examples/profile_blend 20`
 //!
 //! The argument is the number of checked blends (default 20); `blend`
-//! as a second argument times the blend alone.
+//! as a second argument times the blend alone, `one` the checked
+//! straight motion of one sub-goal (the hover to the approach, a long
+//! one), as a planner joins a sub-goal.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -23,7 +25,11 @@ use std::hint::black_box;
 fn main() {
     let mut args = std::env::args().skip(1);
     let runs: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(20);
-    let alone = args.next().is_some_and(|a| a == "blend");
+    let mode = args.next();
+    let alone = mode.as_deref() == Some("blend");
+    // One sub-goal: the straight checked motion from the hover to the
+    // approach, as a planner joins a sub-goal.
+    let one = mode.as_deref() == Some("one");
     let arm = Arm::ur10();
     let cell = bench_cell();
     let mut checker = Checker::new(&arm, &cell);
@@ -63,7 +69,19 @@ fn main() {
         }
     };
     for _ in 0..runs {
-        if alone {
+        if one {
+            let b = checked_blend(
+                &arm,
+                &checker,
+                black_box(product[0]),
+                &product[3..4],
+                &[],
+                Load::FREE,
+            )
+            .expect("free");
+            commands += b.samples.len();
+            eat(&b.samples);
+        } else if alone {
             let b = blend(arm.limits, black_box(start), &product, &stops).expect("blends");
             commands += b.samples.len();
             eat(&b.samples);

@@ -50,7 +50,7 @@
 use rsruckig::prelude::*;
 
 use crate::error::{Position, SmoothingError};
-use crate::smoothing::{CONTROL_PERIOD, rest_to_rest, ruckig_input};
+use crate::smoothing::{CONTROL_PERIOD, Generator, rest_to_rest, ruckig_input};
 use packwright_interface::{DOF, Joints, Limits};
 
 /// How many transitions are tried per corner: these fractions of the room
@@ -498,7 +498,8 @@ pub fn blend_straight(
     speeds: &[f64],
     straight: &[Option<[f64; 2]>],
 ) -> Result<Blended, SmoothingError> {
-    let (mut otg, mut input) = ruckig_input(&limits, start)?;
+    let mut input = ruckig_input(&limits, start)?;
+    let mut otg = Generator::lend();
     for (i, w) in waypoints.iter().enumerate() {
         crate::smoothing::check_position(&limits, w, Position::Waypoint(i))?;
     }
@@ -507,8 +508,8 @@ pub fn blend_straight(
     for (i, w) in waypoints.iter().enumerate() {
         let share = speeds.get(i).copied().unwrap_or(1.0);
         let l = if share > 0.0 && share < 1.0 {
-            let (mut slow_otg, mut slow_input) = ruckig_input(&slowed(&limits, share), from)?;
-            leg(&mut slow_otg, &mut slow_input, from, *w, i)?
+            let mut slow_input = ruckig_input(&slowed(&limits, share), from)?;
+            leg(&mut otg, &mut slow_input, from, *w, i)?
         } else {
             leg(&mut otg, &mut input, from, *w, i)?
         };
@@ -752,8 +753,10 @@ mod tests {
         let joints = |rng: &mut ChaCha8Rng| -> Joints {
             std::array::from_fn(|j| rng.random_range(limits[j].lower / 2.0..limits[j].upper / 2.0))
         };
-        let (mut otg, mut input) = ruckig_input(&limits, [0.0; DOF]).expect("limits");
-        let (mut free, mut free_input) = ruckig_input(&limits, [0.0; DOF]).expect("limits");
+        let mut input = ruckig_input(&limits, [0.0; DOF]).expect("limits");
+        let mut otg = Generator::lend();
+        let mut free_input = ruckig_input(&limits, [0.0; DOF]).expect("limits");
+        let mut free = Generator::lend();
         free_input.synchronization = Synchronization::Time;
         let (mut compared, mut braking) = (0, 0);
         for k in 0..300 {

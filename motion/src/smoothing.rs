@@ -118,10 +118,10 @@ impl Smoother {
     /// positive, a position range is empty or NaN, or `start` is not finite
     /// or outside the position limits.
     pub fn new(limits: [Limits; DOF], start: Joints) -> Result<Smoother, SmoothingError> {
-        let (otg, input) = ruckig_input(&limits, start)?;
+        let input = ruckig_input(&limits, start)?;
         let mut smoother = Smoother {
             limits,
-            otg,
+            otg: Ruckig::new(None, CONTROL_PERIOD),
             input,
             output: OutputParameter::new(None),
         };
@@ -302,7 +302,8 @@ pub fn duration_of(
     start: Joints,
     waypoints: &[Joints],
 ) -> Result<f64, SmoothingError> {
-    let (mut otg, mut input) = ruckig_input(&limits, start)?;
+    let mut input = ruckig_input(&limits, start)?;
+    let mut otg = Generator::lend();
     let mut total = 0.0;
     let mut from = start;
     for (i, w) in waypoints.iter().enumerate() {
@@ -318,7 +319,8 @@ pub fn duration_of(
 /// (Ruckig), the slowest joint's. No synchronisation, no path: a lower
 /// bound for every planner between the same two stops.
 pub fn lower_bound(limits: [Limits; DOF], from: Joints, to: Joints) -> Result<f64, SmoothingError> {
-    let (mut otg, mut input) = ruckig_input(&limits, from)?;
+    let mut input = ruckig_input(&limits, from)?;
+    let mut otg = Generator::lend();
     check_position(&limits, &to, Position::Target)?;
     Ok(rest_to_rest(&mut otg, &mut input, from, to, 0)?
         .get_independent_min_durations()
@@ -356,14 +358,15 @@ pub(crate) fn rest_to_rest(
     Ok(trajectory)
 }
 
-/// A Ruckig generator at the control rate and its input for `limits`
-/// (phase-synchronised, position interface, continuous durations, the
-/// position range with [`POSITION_TOLERANCE`]), at rest at `start`: what
-/// [`Smoother`] and [`blend`](crate::blend::blend) plan with.
+/// The input for `limits` (phase-synchronised, position interface,
+/// continuous durations, the position range with
+/// [`POSITION_TOLERANCE`]), at rest at `start`: what [`Smoother`] and
+/// [`blend`](crate::blend::blend) plan with, with a generator at the
+/// control rate ([`Generator`] offline, the smoother's own online).
 pub(crate) fn ruckig_input(
     limits: &[Limits; DOF],
     start: Joints,
-) -> Result<(Ruckig<DOF, ThrowErrorHandler>, InputParameter<DOF>), SmoothingError> {
+) -> Result<InputParameter<DOF>, SmoothingError> {
     check_limits(limits)?;
     check_position(limits, &start, Position::Start)?;
     let mut input = InputParameter::<DOF>::new(None);
@@ -383,7 +386,63 @@ pub(crate) fn ruckig_input(
     input.min_position = Some(DataArrayOrVec::Stack(min_position));
     input.current_position.copy_from_slice(&start);
     input.target_position.copy_from_slice(&start);
-    Ok((Ruckig::new(None, CONTROL_PERIOD), input))
+    Ok(input)
+}
+
+type Ruckig6 = Ruckig<DOF, ThrowErrorHandler>;
+
+thread_local! {
+    /// This thread's offline generators not lent at the moment.
+    static SPARE: std::cell::RefCell<Vec<Box<Ruckig6>>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// An offline Ruckig generator at the control rate, lent from this
+/// thread's spares and given back when dropped. A generator is about
+/// 32 KB: building one (and moving it) per blend was most of a short
+/// blend's fixed cost, and touched more memory than the blend itself.
+/// An offline calculation (`Ruckig::calculate`) keeps no state from one
+/// call to the next (the calculator's buffers are scratch, rewritten by
+/// each), so one generator serves any input; the online update
+/// (`Ruckig::update`), which does keep state, is the [`Smoother`]'s own
+/// generator's alone, never a lent one's. A test compares a lent
+/// generator's trajectories with a new one's, bit for bit.
+pub(crate) struct Generator(Option<Box<Ruckig6>>);
+
+impl Generator {
+    /// A spare generator of this thread, or a new one.
+    pub(crate) fn lend() -> Generator {
+        let spare = SPARE.with(|s| s.borrow_mut().pop());
+        Generator(Some(
+            spare.unwrap_or_else(|| Box::new(Ruckig::new(None, CONTROL_PERIOD))),
+        ))
+    }
+}
+
+impl std::ops::Deref for Generator {
+    type Target = Ruckig6;
+    fn deref(&self) -> &Ruckig6 {
+        // Some until dropped.
+        self.0
+            .as_deref()
+            .unwrap_or_else(|| unreachable!("a generator is lent until dropped"))
+    }
+}
+
+impl std::ops::DerefMut for Generator {
+    fn deref_mut(&mut self) -> &mut Ruckig6 {
+        self.0
+            .as_deref_mut()
+            .unwrap_or_else(|| unreachable!("a generator is lent until dropped"))
+    }
+}
+
+impl Drop for Generator {
+    fn drop(&mut self) {
+        if let Some(otg) = self.0.take() {
+            // During thread teardown the spares may be gone: then it is freed.
+            let _ = SPARE.try_with(|s| s.borrow_mut().push(otg));
+        }
+    }
 }
 
 fn check_limits(limits: &[Limits; DOF]) -> Result<(), SmoothingError> {
@@ -447,4 +506,100 @@ fn to_joints(values: &[f64]) -> Joints {
     let mut q = [0.0; DOF];
     q.copy_from_slice(&values[..DOF]);
     q
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use packwright_kinematics::Arm;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Every number of a trajectory that the planners read: the duration,
+    /// each joint's own minimum duration, and the state at a few times.
+    fn fingerprint(t: &Trajectory<DOF>) -> Vec<u64> {
+        let mut out = vec![t.get_duration().to_bits()];
+        out.extend(
+            t.get_independent_min_durations()
+                .iter()
+                .map(|d| d.to_bits()),
+        );
+        for share in [0.0, 0.1, 0.37, 0.5, 0.81, 1.0] {
+            let mut p = DataArrayOrVec::Stack([0.0; DOF]);
+            let mut v = DataArrayOrVec::Stack([0.0; DOF]);
+            let mut a = DataArrayOrVec::Stack([0.0; DOF]);
+            t.at_time(
+                share * t.get_duration(),
+                &mut Some(&mut p),
+                &mut Some(&mut v),
+                &mut Some(&mut a),
+                &mut None,
+                &mut None,
+            );
+            for j in 0..DOF {
+                out.extend([p[j].to_bits(), v[j].to_bits(), a[j].to_bits()]);
+            }
+        }
+        out
+    }
+
+    /// One lent generator, used for hundreds of calculations in a row
+    /// (rest to rest and from moving states, phase- and
+    /// time-synchronised, full and slowed limits, some failing), gives
+    /// each the trajectory a new generator gives, bit for bit.
+    #[test]
+    fn a_lent_generator_calculates_as_a_new_one() {
+        let limits = Arm::ur10().limits;
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let joints = |rng: &mut ChaCha8Rng| -> Joints {
+            std::array::from_fn(|j| rng.random_range(limits[j].lower / 2.0..limits[j].upper / 2.0))
+        };
+        let mut lent = Generator::lend();
+        let (mut same, mut failed) = (0, 0);
+        for k in 0..400 {
+            let share = if k % 3 == 0 { 0.3 } else { 1.0 };
+            let slow = crate::blend::slowed(&limits, share);
+            let mut input =
+                ruckig_input(if share < 1.0 { &slow } else { &limits }, joints(&mut rng))
+                    .expect("limits");
+            if k % 2 == 1 {
+                input.synchronization = Synchronization::Time;
+                input.current_velocity = DataArrayOrVec::Stack(std::array::from_fn(|j| {
+                    rng.random_range(-1.5..1.5) * limits[j].velocity
+                }));
+                input.current_acceleration = DataArrayOrVec::Stack(std::array::from_fn(|j| {
+                    rng.random_range(-1.5..1.5) * limits[j].acceleration
+                }));
+            }
+            input.target_position.copy_from_slice(&joints(&mut rng));
+            let mut fresh = Ruckig::<DOF, ThrowErrorHandler>::new(None, CONTROL_PERIOD);
+            let (mut a, mut b) = (Trajectory::new(None), Trajectory::new(None));
+            let (ra, rb) = (
+                lent.calculate(&input, &mut a),
+                fresh.calculate(&input, &mut b),
+            );
+            assert_eq!(format!("{ra:?}"), format!("{rb:?}"), "case {k}");
+            if ra.is_ok() {
+                assert_eq!(fingerprint(&a), fingerprint(&b), "case {k}");
+                same += 1;
+            } else {
+                failed += 1;
+            }
+        }
+        assert!(same >= 300, "{same} compared, {failed} failed");
+    }
+
+    /// A generator given back is lent again (no new one is built), and
+    /// two lent at once are two.
+    #[test]
+    fn generators_are_given_back_and_lent_again() {
+        let first: *const Ruckig6 = {
+            let lent = Generator::lend();
+            &*lent as *const Ruckig6
+        };
+        let again = Generator::lend();
+        assert_eq!(first, &*again as *const Ruckig6);
+        let other = Generator::lend();
+        assert_ne!(&*again as *const Ruckig6, &*other as *const Ruckig6);
+    }
 }
