@@ -19,7 +19,7 @@ use packwright_interface::outcome::{
 };
 use packwright_interface::world::{Contact, Observation, World};
 use packwright_interface::{CellScene, OrderTask};
-use packwright_kinematics::{Arm, Joints, joint_distance, tool_down_pose};
+use packwright_kinematics::{Arm, DOF, Joints, joint_distance, tool_down_pose};
 use std::f64::consts::FRAC_PI_2;
 use std::time::{Duration, Instant};
 
@@ -896,6 +896,7 @@ fn straight_shares(
     speeds: &[f64],
 ) -> Vec<Option<[f64; 2]>> {
     let tip = |q: &Joints| checker.arm().tool_tip(checker.base(), q, checker.suction());
+    let radii = checker.arm().tip_radii(checker.suction());
     // The least share of the way from `stop` to `other` beyond which the
     // tip is STOP_CLEARANCE or more from the tip at `stop`, on a grid of
     // SHARES steps (rounded up: the next grid point after the last one
@@ -903,14 +904,36 @@ fn straight_shares(
     const SHARES: usize = 64;
     let share = |stop: &Joints, other: &Joints| -> f64 {
         let at = tip(stop);
-        let last_near = (1..=SHARES)
-            .filter(|&i| {
-                let s = i as f64 / SHARES as f64;
-                let q: Joints = std::array::from_fn(|j| stop[j] + s * (other[j] - stop[j]));
-                (tip(&q) - at).norm() < STOP_CLEARANCE
-            })
-            .max()
-            .unwrap_or(0);
+        // How far the tip can move from one grid point to the next
+        // (`Arm::tip_radii`).
+        let per_step = (0..DOF)
+            .map(|j| radii[j] * (other[j] - stop[j]).abs())
+            .sum::<f64>()
+            / SHARES as f64;
+        // The last grid point nearer than STOP_CLEARANCE, scanning back
+        // from the far end: a point `d` away proves the `m` points before
+        // it farther than STOP_CLEARANCE too, for `m * per_step` up to
+        // `d - STOP_CLEARANCE` (less 1 nm, far above rounding), so they
+        // are skipped. The same point as testing every one.
+        let mut i = SHARES;
+        let last_near = loop {
+            if i == 0 {
+                break 0;
+            }
+            let s = i as f64 / SHARES as f64;
+            let q: Joints = std::array::from_fn(|j| stop[j] + s * (other[j] - stop[j]));
+            let d = (tip(&q) - at).norm();
+            if d < STOP_CLEARANCE {
+                break i;
+            }
+            let far = ((d - STOP_CLEARANCE - 1e-9) / per_step).floor();
+            let skip = if far.is_finite() && far > 0.0 {
+                (far as usize).min(i)
+            } else {
+                0
+            };
+            i = i.saturating_sub(skip + 1);
+        };
         ((last_near + 1) as f64 / SHARES as f64).min(1.0)
     };
     let mut from = start;

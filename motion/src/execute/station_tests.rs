@@ -167,3 +167,43 @@ fn transitions_ignore_nothing_and_stops_keep_their_clearance() {
         }
     }
 }
+
+/// The straight shares found by skipping the grid points the tip's
+/// speed bound proves far are those of testing every grid point, on
+/// random legs, long and short (a few centimetres, as a descent).
+#[test]
+fn straight_shares_skip_only_points_proved_far() {
+    use rand::{Rng, SeedableRng};
+    let arm = Arm::ur10();
+    let checker = Checker::new(&arm, &common::bench_cell());
+    let tip = |q: &Joints| arm.tool_tip(checker.base(), q, checker.suction());
+    // Every grid point tested, as before the bound.
+    let exhaustive = |stop: &Joints, other: &Joints| -> f64 {
+        let at = tip(stop);
+        let last_near = (1..=64)
+            .filter(|&i| {
+                let s = i as f64 / 64.0;
+                let q: Joints = std::array::from_fn(|j| stop[j] + s * (other[j] - stop[j]));
+                (tip(&q) - at).norm() < STOP_CLEARANCE
+            })
+            .max()
+            .unwrap_or(0);
+        ((last_near + 1) as f64 / 64.0).min(1.0)
+    };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let mut partial = 0;
+    for k in 0..400 {
+        let start: Joints = std::array::from_fn(|j| {
+            rng.random_range(arm.limits[j].lower / 2.0..arm.limits[j].upper / 2.0)
+        });
+        // Long legs, and short ones of up to a few degrees.
+        let reach = if k % 2 == 0 { 1.5 } else { 0.05 };
+        let to: Joints = std::array::from_fn(|j| start[j] + rng.random_range(-reach..reach));
+        let shares = straight_shares(&checker, start, &[to], &[1.0]);
+        let [leaving, reaching] = shares[0].expect("a full-speed leg has shares");
+        assert_eq!(leaving, exhaustive(&start, &to), "leg {k} leaving");
+        assert_eq!(reaching, exhaustive(&to, &start), "leg {k} reaching");
+        partial += usize::from(leaving < 1.0);
+    }
+    assert!(partial > 150, "{partial} legs left the clearance");
+}
