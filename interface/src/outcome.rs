@@ -450,7 +450,9 @@ pub struct Timing {
     /// Per decision of what to handle next (the reasoner, or the expert's
     /// sequence rule).
     pub decision_us: Vec<f64>,
-    /// Per sub-goal: finding it and planning the motion to it.
+    /// Per sub-goal: finding it and planning the motion to it, for every
+    /// planner the same sub-goals (the back-up after a release among
+    /// them).
     pub subgoal_us: Vec<f64>,
     /// Learned planner only: one sub-goal planner call plus the first
     /// dynamics policy call of its rollout (sub-goals with a rollout).

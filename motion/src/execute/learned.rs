@@ -555,7 +555,9 @@ impl<W: World> Learned<'_, W> {
                 s.checked(1, start, &vias, load).map_err(|_| straight)?
             }
         };
-        self.station.spend(1, started)?;
+        // Timed as a sub-goal, as the other planners' back-up is.
+        let elapsed = self.station.spend(1, started)?;
+        self.station.timing.subgoal_us.push(elapsed * 1e6);
         Ok(Leg::new(route, Suction::Keep, load))
     }
 
