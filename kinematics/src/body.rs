@@ -15,7 +15,7 @@ use packwright_interface::scene::CellScene;
 use packwright_interface::world::Body;
 use parry3d::math::{Pose, Vector};
 use parry3d::query;
-use parry3d::shape::{Capsule, Cuboid, SharedShape};
+use parry3d::shape::{Capsule, Cuboid, Shape as ParryShape, SharedShape};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -168,7 +168,7 @@ pub fn touching_pairs(arm: &Arm, suction: f64) -> Vec<(usize, usize)> {
                 if adjacent(la, lb) || hits.contains(&(la, lb)) {
                     continue;
                 }
-                if intersects(&poses[i], &a.shape, &poses[j], &b.shape) {
+                if intersects(&poses[i], &*a.shape, &poses[j], &*b.shape) {
                     hits.push((la, lb));
                 }
             }
@@ -203,7 +203,7 @@ pub fn touching_pairs(arm: &Arm, suction: f64) -> Vec<(usize, usize)> {
 /// GJK's own tolerance on these shapes (its termination threshold is
 /// 1.2e-6 relative, on shapes of about a metre), so the answer is parry's
 /// (property-tested against it in `tests/intersects.rs`).
-pub fn intersects(p1: &Pose, s1: &SharedShape, p2: &Pose, s2: &SharedShape) -> bool {
+pub fn intersects(p1: &Pose, s1: &dyn ParryShape, p2: &Pose, s2: &dyn ParryShape) -> bool {
     if let (Some(c1), Some(c2)) = (s1.as_capsule(), s2.as_capsule())
         && let Some(answer) = capsules_decided(p1, c1, p2, c2)
     {
@@ -222,8 +222,8 @@ pub fn intersects(p1: &Pose, s1: &SharedShape, p2: &Pose, s2: &SharedShape) -> b
 /// Whether two shapes intersect, by parry alone (GJK for capsules and
 /// cuboids). An unsupported pair cannot happen with capsules and cuboids;
 /// it counts as a collision, to stay on the safe side.
-pub fn exact_intersects(p1: &Pose, s1: &SharedShape, p2: &Pose, s2: &SharedShape) -> bool {
-    query::intersection_test(p1, s1.as_ref(), p2, s2.as_ref()).map_or(true, |i| i.intersecting)
+pub fn exact_intersects(p1: &Pose, s1: &dyn ParryShape, p2: &Pose, s2: &dyn ParryShape) -> bool {
+    query::intersection_test(p1, s1, p2, s2).map_or(true, |i| i.intersecting)
 }
 
 /// How far from touching (m) two capsules must be, apart or into each

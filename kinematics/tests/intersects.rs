@@ -63,8 +63,8 @@ fn random_capsule_pairs_get_parrys_answer() {
             pose(&random_pose(&mut rng, 0.2)),
             pose(&random_pose(&mut rng, 0.2)),
         );
-        let fast = intersects(&p1, &s1, &p2, &s2);
-        assert_eq!(fast, exact_intersects(&p1, &s1, &p2, &s2));
+        let fast = intersects(&p1, &*s1, &p2, &*s2);
+        assert_eq!(fast, exact_intersects(&p1, &*s1, &p2, &*s2));
         if fast {
             hits += 1;
         } else {
@@ -92,11 +92,11 @@ fn capsule_and_cuboid_pairs_get_parrys_answer() {
         } else {
             pose(&random_pose(&mut rng, 0.4))
         };
-        let fast = intersects(&pc, &c, &pb, &b);
-        assert_eq!(fast, exact_intersects(&pc, &c, &pb, &b));
+        let fast = intersects(&pc, &*c, &pb, &*b);
+        assert_eq!(fast, exact_intersects(&pc, &*c, &pb, &*b));
         assert_eq!(
-            intersects(&pb, &b, &pc, &c),
-            exact_intersects(&pb, &b, &pc, &c)
+            intersects(&pb, &*b, &pc, &*c),
+            exact_intersects(&pb, &*b, &pc, &*c)
         );
         if fast {
             hits += 1;
@@ -128,8 +128,8 @@ fn capsule_and_cuboid_near_touching_get_parrys_answer() {
         let shift = half[k] + cap.radius + gap - ends[0].min(ends[1]);
         pc.translation += axis * shift;
         assert_eq!(
-            intersects(&pc, &c, &pb, &b),
-            exact_intersects(&pc, &c, &pb, &b)
+            intersects(&pc, &*c, &pb, &*b),
+            exact_intersects(&pc, &*c, &pb, &*b)
         );
     }
 }
@@ -170,8 +170,8 @@ fn capsules_near_touching_get_parrys_answer() {
         let mut moved = p2;
         moved.translation += dir * ((reach + gap - d) as f32);
         assert_eq!(
-            intersects(&p1, &s1, &moved, &s2),
-            exact_intersects(&p1, &s1, &moved, &s2)
+            intersects(&p1, &*s1, &moved, &*s2),
+            exact_intersects(&p1, &*s1, &moved, &*s2)
         );
     }
 }
@@ -241,9 +241,9 @@ fn the_ur10_parts_get_parrys_answer_at_random_configurations() {
             .collect();
         for i in 0..parts.len() {
             for j in i + 1..parts.len() {
-                let fast = intersects(&poses[i], &parts[i].shape, &poses[j], &parts[j].shape);
+                let fast = intersects(&poses[i], &*parts[i].shape, &poses[j], &*parts[j].shape);
                 let exact =
-                    exact_intersects(&poses[i], &parts[i].shape, &poses[j], &parts[j].shape);
+                    exact_intersects(&poses[i], &*parts[i].shape, &poses[j], &*parts[j].shape);
                 assert_eq!(fast, exact, "parts {i} and {j} at {q:?}");
                 colliding += usize::from(fast);
             }

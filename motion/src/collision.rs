@@ -19,6 +19,7 @@
 //! touching. The answers (which bodies included) are those of the plain
 //! check, kept as the reference in this module's tests.
 
+use arrayvec::ArrayVec;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use packwright_interface::outcome::Hit;
 use packwright_interface::scene::CellScene;
@@ -27,7 +28,15 @@ use packwright_kinematics::body::{self, ArmPart, CUP, HELD_PADDING, PADDING, int
 use packwright_kinematics::{Arm, DOF, Joints};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Vector};
-use parry3d::shape::{Cuboid, SharedShape};
+use parry3d::shape::{Cuboid, Shape as _, SharedShape};
+
+/// Arm parts whose poses a check keeps on the stack (the UR10 has 10);
+/// an arm of more goes to the heap.
+const STACK_PARTS: usize = 16;
+
+/// Obstacles near the arm a check lists on the stack; more go to the
+/// heap.
+const STACK_NEAR: usize = 32;
 
 /// Largest joint step when checking a motion, radians (1 degree).
 pub const MAX_STEP: f64 = std::f64::consts::PI / 180.0;
@@ -88,7 +97,7 @@ impl Held {
     /// (its pose and shape), grown by `pad`. Leaving its support, the box
     /// keeps its margin above but ends [`LIFT_CLEARANCE`] short of the
     /// bottom (the product's +z is the flange's, pointing down).
-    fn padded_box(&self, flange: &Isometry3<f64>, pad: f64) -> (Pose, SharedShape) {
+    fn padded_box(&self, flange: &Isometry3<f64>, pad: f64) -> (Pose, Cuboid) {
         let (half_z, shift) = if self.leaving_support {
             let cut = pad + LIFT_CLEARANCE;
             (self.size[2] / 2.0 + pad - cut / 2.0, -cut / 2.0)
@@ -96,11 +105,11 @@ impl Held {
             (self.size[2] / 2.0 + pad, 0.0)
         };
         let at = pose(&(flange * self.in_flange * Isometry3::translation(0.0, 0.0, shift)));
-        let cuboid = SharedShape::new(Cuboid::new(Vector::new(
+        let cuboid = Cuboid::new(Vector::new(
             (self.size[0] / 2.0 + pad) as f32,
             (self.size[1] / 2.0 + pad) as f32,
             half_z as f32,
-        )));
+        ));
         (at, cuboid)
     }
 
@@ -258,27 +267,37 @@ impl Checker {
             return Some(Hit::InvalidJoints);
         }
         let links = self.arm.link_poses(&self.base, q);
+        // Each part's pose and box, on the stack for an arm of up to
+        // STACK_PARTS parts (no allocation per check).
+        let mut on_stack: ArrayVec<(Pose, Aabb), STACK_PARTS> = ArrayVec::new();
+        let mut on_heap = Vec::new();
         // A part placed at its link's origin has its link's pose (times
         // the identity, which changes no value): converted once per link.
         let mut last: Option<(usize, Pose)> = None;
-        let placed: Vec<(Pose, Aabb)> = self
-            .parts
-            .iter()
-            .zip(&self.at_origin)
-            .map(|(part, &at_origin)| {
-                let link = part.link();
-                let p = match last {
-                    Some((l, p)) if at_origin && l == link => p,
-                    _ if at_origin => {
-                        let p = pose(&links[link]);
-                        last = Some((link, p));
-                        p
-                    }
-                    _ => pose(&(links[link] * part.local)),
-                };
-                (p, part.shape.compute_aabb(&p))
-            })
-            .collect();
+        for (part, &at_origin) in self.parts.iter().zip(&self.at_origin) {
+            let link = part.link();
+            let p = match last {
+                Some((l, p)) if at_origin && l == link => p,
+                _ if at_origin => {
+                    let p = pose(&links[link]);
+                    last = Some((link, p));
+                    p
+                }
+                _ => pose(&(links[link] * part.local)),
+            };
+            let entry = (p, part.shape.compute_aabb(&p));
+            if let Err(full) = on_stack.try_push(entry) {
+                if on_heap.is_empty() {
+                    on_heap.extend(on_stack.iter().copied());
+                }
+                on_heap.push(full.element());
+            }
+        }
+        let placed: &[(Pose, Aabb)] = if on_heap.is_empty() {
+            &on_stack
+        } else {
+            &on_heap
+        };
         let whole = placed
             .iter()
             .map(|(_, b)| *b)
@@ -289,20 +308,33 @@ impl Checker {
             Body::Product(n) => Some(n.as_str()) == name,
             _ => false,
         };
-        // The obstacles near the arm, the held product never one of them.
-        let near: Vec<&Obstacle> = self
-            .statics
-            .iter()
-            .chain(&self.products)
-            .filter(|o| !is(o, held_name) && o.aabb.intersects(&whole))
-            .collect();
-        for (part, (p, aabb)) in self.parts.iter().zip(&placed) {
+        // The obstacles near the arm, the held product never one of them
+        // (on the stack up to STACK_NEAR of them).
+        let mut near_stack: ArrayVec<&Obstacle, STACK_NEAR> = ArrayVec::new();
+        let mut near_heap: Vec<&Obstacle> = Vec::new();
+        for o in self.statics.iter().chain(&self.products) {
+            if !is(o, held_name)
+                && o.aabb.intersects(&whole)
+                && let Err(full) = near_stack.try_push(o)
+            {
+                if near_heap.is_empty() {
+                    near_heap.extend(near_stack.iter().copied());
+                }
+                near_heap.push(full.element());
+            }
+        }
+        let near: &[&Obstacle] = if near_heap.is_empty() {
+            &near_stack
+        } else {
+            &near_heap
+        };
+        for (part, (p, aabb)) in self.parts.iter().zip(placed) {
             let by_cup = part.part == CUP;
-            for o in &near {
+            for &o in near {
                 if (o.is_table && part.part <= 1) || (by_cup && is(o, ignore)) {
                     continue;
                 }
-                if aabb.intersects(&o.aabb) && intersects(p, &part.shape, &o.pose, &o.shape) {
+                if aabb.intersects(&o.aabb) && intersects(p, &*part.shape, &o.pose, &*o.shape) {
                     return Some(Hit::Bodies {
                         a: self.names[part.part].clone(),
                         b: o.body.clone(),
@@ -312,7 +344,8 @@ impl Checker {
         }
         for &(i, j) in &self.pairs {
             let ((pi, bi), (pj, bj)) = (&placed[i], &placed[j]);
-            if bi.intersects(bj) && intersects(pi, &self.parts[i].shape, pj, &self.parts[j].shape) {
+            if bi.intersects(bj) && intersects(pi, &*self.parts[i].shape, pj, &*self.parts[j].shape)
+            {
                 let (a, b) = (self.parts[i].part, self.parts[j].part);
                 return Some(Hit::Bodies {
                     a: self.names[a.min(b)].clone(),
@@ -326,20 +359,20 @@ impl Checker {
             let flange = links[DOF] * self.arm.flange;
             let (hp, cuboid) = h.padded_box(&flange, self.held_padding);
             let aabb = cuboid.compute_aabb(&hp);
-            let name = Body::Held(h.name.clone());
+            let name = || Body::Held(h.name.clone());
             let obstacles = self.statics.iter().chain(&self.products);
             for o in obstacles.filter(|o| !is(o, held_name) && !is(o, ignore)) {
-                if aabb.intersects(&o.aabb) && intersects(&hp, &cuboid, &o.pose, &o.shape) {
+                if aabb.intersects(&o.aabb) && intersects(&hp, &cuboid, &o.pose, &*o.shape) {
                     return Some(Hit::Bodies {
-                        a: name,
+                        a: name(),
                         b: o.body.clone(),
                     });
                 }
             }
-            for (part, (p, _)) in self.parts.iter().zip(&placed) {
-                if part.part < DOF && intersects(&hp, &cuboid, p, &part.shape) {
+            for (part, (p, _)) in self.parts.iter().zip(placed) {
+                if part.part < DOF && intersects(&hp, &cuboid, p, &*part.shape) {
                     return Some(Hit::Bodies {
-                        a: name,
+                        a: name(),
                         b: self.names[part.part].clone(),
                     });
                 }
@@ -420,7 +453,7 @@ mod tests {
                 if o.is_table && part.part <= 1 {
                     continue;
                 }
-                if aabb.intersects(&o.aabb) && intersects(p, &part.shape, &o.pose, &o.shape) {
+                if aabb.intersects(&o.aabb) && intersects(p, &*part.shape, &o.pose, &*o.shape) {
                     return Some(Hit::Bodies {
                         a: c.names[part.part].clone(),
                         b: o.body.clone(),
@@ -443,7 +476,7 @@ mod tests {
                 {
                     continue;
                 }
-                if intersects(&poses[i], &a.shape, &poses[j], &b.shape) {
+                if intersects(&poses[i], &*a.shape, &poses[j], &*b.shape) {
                     return Some(Hit::Bodies {
                         a: c.names[la].clone(),
                         b: c.names[lb].clone(),
@@ -457,7 +490,7 @@ mod tests {
             let aabb = cuboid.compute_aabb(&hp);
             let name = Body::Held(h.name.clone());
             for o in obstacles(true) {
-                if aabb.intersects(&o.aabb) && intersects(&hp, &cuboid, &o.pose, &o.shape) {
+                if aabb.intersects(&o.aabb) && intersects(&hp, &cuboid, &o.pose, &*o.shape) {
                     return Some(Hit::Bodies {
                         a: name,
                         b: o.body.clone(),
@@ -465,7 +498,7 @@ mod tests {
                 }
             }
             for (part, p) in c.parts.iter().zip(&poses) {
-                if part.part < DOF && intersects(&hp, &cuboid, p, &part.shape) {
+                if part.part < DOF && intersects(&hp, &cuboid, p, &*part.shape) {
                     return Some(Hit::Bodies {
                         a: name,
                         b: c.names[part.part].clone(),
@@ -502,10 +535,6 @@ mod tests {
     /// the reference's.
     #[test]
     fn the_fast_check_answers_as_the_reference() {
-        let arm = Arm::ur10();
-        let cell = cell();
-        let mut checker = Checker::new(&arm, &cell);
-        let allowed = body::touching_pairs(&arm, cell.suction);
         let products: Vec<ProductBody> = (0..6)
             .map(|i| ProductBody {
                 name: format!("P{i}"),
@@ -514,8 +543,41 @@ mod tests {
                 yaw: 0.3 * i as f64,
             })
             .collect();
-        checker.set_products(&products);
-        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let (free, hit) = answers_as_the_reference(&products, 11);
+        assert!(free > 500 && hit > 500, "{free} free, {hit} colliding");
+    }
+
+    /// More obstacles near the arm than a check lists on the stack
+    /// (`STACK_NEAR`): the same answers.
+    #[test]
+    fn the_fast_check_answers_as_the_reference_among_many_products() {
+        let products: Vec<ProductBody> = (0..60)
+            .map(|i| ProductBody {
+                name: format!("P{i}"),
+                centre: [
+                    0.4 + 0.06 * (i % 10) as f64,
+                    -0.15 - 0.07 * (i / 10) as f64,
+                    0.02,
+                ],
+                size: [0.04, 0.04, 0.04],
+                yaw: 0.1 * i as f64,
+            })
+            .collect();
+        let (free, hit) = answers_as_the_reference(&products, 12);
+        assert!(free > 300 && hit > 500, "{free} free, {hit} colliding");
+    }
+
+    /// [`Checker::check`] against [`reference_check`] at 6,000 random
+    /// configurations (tool down over the pending area or the box, or
+    /// anywhere), holding or not, ignoring P1 or not, among `products`:
+    /// how many were free and how many collided.
+    fn answers_as_the_reference(products: &[ProductBody], seed: u64) -> (usize, usize) {
+        let arm = Arm::ur10();
+        let cell = cell();
+        let mut checker = Checker::new(&arm, &cell);
+        let allowed = body::touching_pairs(&arm, cell.suction);
+        checker.set_products(products);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let held = Held::under_cup("P2", [0.05, 0.06, 0.06], 0.1, Vector3::new(0.004, 0.0, 0.0));
         let (mut free, mut hit) = (0, 0);
         for k in 0..6_000 {
@@ -560,6 +622,6 @@ mod tests {
                 free += 1;
             }
         }
-        assert!(free > 500 && hit > 500, "{free} free, {hit} colliding");
+        (free, hit)
     }
 }
