@@ -520,12 +520,13 @@ impl<W: World> Learned<'_, W> {
     /// sent: it is sent with the next product's hover (or alone at the end
     /// of the run).
     fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<Leg, Failure> {
-        let started = self.station.begin();
         let load = Load::ignoring(name);
         // The released product where it lies (its last observed place was
-        // under the cup).
+        // under the cup). Observed before the planning is timed, as the
+        // other planners observe before they plan their back-up.
         let obs = self.station.world.observe();
         self.station.sync_products(&obs);
+        let started = self.station.begin();
         let s = &self.station;
         let start = obs.joints;
         // Straight up from where the cup let go: a learned "above" a few
