@@ -1,6 +1,7 @@
 //! The learned networks at run time (batch 1, the plain `nalgebra` passes
 //! of `Networks`): a reasoner decision for 3, 5 and 20 products, a sub-goal
-//! planner call and a dynamics-policy action; with the bundled model.
+//! planner call and a dynamics-policy action, and the first calls of a
+//! stage on cold caches; with the bundled model.
 
 use std::hint::black_box;
 use std::path::Path;
@@ -75,6 +76,28 @@ fn learning(c: &mut Criterion) {
     });
     c.bench_function("dynamics_action", |b| {
         b.iter(|| nets.action(black_box([0.1, -0.2, 0.05]), [1.0, -1.4, 2.0]))
+    });
+    // The first calls of a stage, after the simulator ran: a sub-goal
+    // query, then eight policy actions (a long swing), on cold caches.
+    c.bench_function("subgoal_and_8_actions_cold_cache", |b| {
+        b.iter_batched(
+            || {
+                for (i, v) in sweep.iter_mut().enumerate() {
+                    *v = v.wrapping_add(i as u8);
+                }
+                black_box(sweep[sweep.len() / 2])
+            },
+            |_| {
+                let goal = nets.subgoal(black_box(&query));
+                let mut q = [1.0f32, -1.4, 2.0];
+                for _ in 0..8 {
+                    let a = nets.action(black_box(goal), q);
+                    q = [q[0] + a[0], q[1] + a[1], q[2] + a[2]];
+                }
+                q
+            },
+            BatchSize::PerIteration,
+        )
     });
 }
 
