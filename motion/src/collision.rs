@@ -19,7 +19,6 @@
 //! touching. The answers (which bodies included) are those of the plain
 //! check, kept as the reference in this module's tests.
 
-use arrayvec::ArrayVec;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use packwright_interface::outcome::Hit;
 use packwright_interface::scene::CellScene;
@@ -29,6 +28,7 @@ use packwright_kinematics::{Arm, DOF, Joints};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::math::{Pose, Vector};
 use parry3d::shape::{Cuboid, Shape as _, SharedShape};
+use smallvec::SmallVec;
 
 /// Arm parts whose poses a check keeps on the stack (the UR10 has 10);
 /// an arm of more goes to the heap.
@@ -269,8 +269,7 @@ impl Checker {
         let links = self.arm.link_poses(&self.base, q);
         // Each part's pose and box, on the stack for an arm of up to
         // STACK_PARTS parts (no allocation per check).
-        let mut on_stack: ArrayVec<(Pose, Aabb), STACK_PARTS> = ArrayVec::new();
-        let mut on_heap = Vec::new();
+        let mut placed: SmallVec<[(Pose, Aabb); STACK_PARTS]> = SmallVec::new();
         // A part placed at its link's origin has its link's pose (times
         // the identity, which changes no value): converted once per link.
         let mut last: Option<(usize, Pose)> = None;
@@ -285,19 +284,9 @@ impl Checker {
                 }
                 _ => pose(&(links[link] * part.local)),
             };
-            let entry = (p, part.shape.compute_aabb(&p));
-            if let Err(full) = on_stack.try_push(entry) {
-                if on_heap.is_empty() {
-                    on_heap.extend(on_stack.iter().copied());
-                }
-                on_heap.push(full.element());
-            }
+            placed.push((p, part.shape.compute_aabb(&p)));
         }
-        let placed: &[(Pose, Aabb)] = if on_heap.is_empty() {
-            &on_stack
-        } else {
-            &on_heap
-        };
+        let placed = &placed[..];
         let whole = placed
             .iter()
             .map(|(_, b)| *b)
@@ -310,27 +299,15 @@ impl Checker {
         };
         // The obstacles near the arm, the held product never one of them
         // (on the stack up to STACK_NEAR of them).
-        let mut near_stack: ArrayVec<&Obstacle, STACK_NEAR> = ArrayVec::new();
-        let mut near_heap: Vec<&Obstacle> = Vec::new();
-        for o in self.statics.iter().chain(&self.products) {
-            if !is(o, held_name)
-                && o.aabb.intersects(&whole)
-                && let Err(full) = near_stack.try_push(o)
-            {
-                if near_heap.is_empty() {
-                    near_heap.extend(near_stack.iter().copied());
-                }
-                near_heap.push(full.element());
-            }
-        }
-        let near: &[&Obstacle] = if near_heap.is_empty() {
-            &near_stack
-        } else {
-            &near_heap
-        };
+        let near: SmallVec<[&Obstacle; STACK_NEAR]> = self
+            .statics
+            .iter()
+            .chain(&self.products)
+            .filter(|o| !is(o, held_name) && o.aabb.intersects(&whole))
+            .collect();
         for (part, (p, aabb)) in self.parts.iter().zip(placed) {
             let by_cup = part.part == CUP;
-            for &o in near {
+            for &o in &near {
                 if (o.is_table && part.part <= 1) || (by_cup && is(o, ignore)) {
                     continue;
                 }
