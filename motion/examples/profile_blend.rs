@@ -61,16 +61,9 @@ fn main() {
     let mut commands = 0;
     // A digest of the commands' bits (FNV-1a), to compare builds.
     let mut digest: u64 = 0xcbf2_9ce4_8422_2325;
-    let mut eat = |samples: &[[f64; 6]]| {
-        for q in samples {
-            for v in q {
-                digest = (digest ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3);
-            }
-        }
-    };
     for _ in 0..runs {
-        if one {
-            let b = checked_blend(
+        let b = if one {
+            checked_blend(
                 &arm,
                 &checker,
                 black_box(product[0]),
@@ -78,15 +71,11 @@ fn main() {
                 &[],
                 Load::FREE,
             )
-            .expect("free");
-            commands += b.samples.len();
-            eat(&b.samples);
+            .expect("free")
         } else if alone {
-            let b = blend(arm.limits, black_box(start), &product, &stops).expect("blends");
-            commands += b.samples.len();
-            eat(&b.samples);
+            blend(arm.limits, black_box(start), &product, &stops).expect("blends")
         } else {
-            let b = checked_blend(
+            checked_blend(
                 &arm,
                 &checker,
                 black_box(start),
@@ -94,9 +83,13 @@ fn main() {
                 &stops,
                 Load::FREE,
             )
-            .expect("free");
-            commands += b.samples.len();
-            eat(&b.samples);
+            .expect("free")
+        };
+        commands += b.samples.len();
+        for q in &b.samples {
+            for v in q {
+                digest = (digest ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3);
+            }
         }
     }
     println!("{runs} runs, {commands} commands, digest {digest:016x}");

@@ -39,6 +39,14 @@ fn graph(m: usize) -> Graph {
     }
 }
 
+/// Writes all of `sweep` (8 MiB): L1 and L2 hold none of what they held.
+fn evict(sweep: &mut [u8]) -> u8 {
+    for (i, v) in sweep.iter_mut().enumerate() {
+        *v = v.wrapping_add(i as u8);
+    }
+    black_box(sweep[sweep.len() / 2])
+}
+
 fn learning(c: &mut Criterion) {
     let nets = bundled();
     for m in [3usize, 5, 20] {
@@ -53,12 +61,7 @@ fn learning(c: &mut Criterion) {
     let g = graph(5);
     c.bench_function("reasoner_decision_5_products_cold_cache", |b| {
         b.iter_batched(
-            || {
-                for (i, v) in sweep.iter_mut().enumerate() {
-                    *v = v.wrapping_add(i as u8);
-                }
-                black_box(sweep[sweep.len() / 2])
-            },
+            || evict(&mut sweep),
             |_| nets.reason(black_box(&g)),
             BatchSize::PerIteration,
         )
@@ -81,12 +84,7 @@ fn learning(c: &mut Criterion) {
     // query, then eight policy actions (a long swing), on cold caches.
     c.bench_function("subgoal_and_8_actions_cold_cache", |b| {
         b.iter_batched(
-            || {
-                for (i, v) in sweep.iter_mut().enumerate() {
-                    *v = v.wrapping_add(i as u8);
-                }
-                black_box(sweep[sweep.len() / 2])
-            },
+            || evict(&mut sweep),
             |_| {
                 let goal = nets.subgoal(black_box(&query));
                 let mut q = [1.0f32, -1.4, 2.0];
