@@ -299,12 +299,12 @@ impl<W: World> Learned<'_, W> {
     ) -> Result<(Route, bool), Failure> {
         let s = &self.station;
         let rrt = |goal: &SubGoal, ceiling: f64| {
-            let target = s.solve(goal, k + 1, &start, 0.0, load, ceiling)?;
-            s.route_any(
+            let solved = s.solve(goal, k + 1, &start, 0.0, load, ceiling)?;
+            s.route_solved(
                 Connect::Rrt { seed: self.seed },
                 k + 1,
                 start,
-                target,
+                solved,
                 0.0,
                 load,
             )
@@ -536,7 +536,7 @@ impl<W: World> Learned<'_, W> {
             tip: [x, y, above[2]],
             suction: Suction::Keep,
         };
-        let target = s.solve(&up, 1, &start, 0.0, load, above[2])?;
+        let target = s.solve(&up, 1, &start, 0.0, load, above[2])?.joints;
         let route = match s.checked(1, start, &[target], load) {
             Ok(route) => route,
             // A straight joint motion bows sideways; from a slot near a
@@ -550,7 +550,7 @@ impl<W: World> Learned<'_, W> {
                         tip: [x, y, z],
                         suction: Suction::Keep,
                     };
-                    near = s.solve(&via, 1, &near, 0.0, load, z)?;
+                    near = s.solve(&via, 1, &near, 0.0, load, z)?.joints;
                     vias.push(near);
                 }
                 s.checked(1, start, &vias, load).map_err(|_| straight)?

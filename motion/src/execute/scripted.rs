@@ -5,7 +5,7 @@
 //! expert's runs can be recorded as motion demonstrations.
 
 use super::station::{
-    Connect, Leg, Load, PlanningBudget, SUCCESS_RADIUS, Station, distance, judge, leg_end,
+    Connect, Leg, Load, PlanningBudget, SUCCESS_RADIUS, Solved, Station, distance, judge, leg_end,
 };
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction};
@@ -34,8 +34,9 @@ struct Scripted<'a, W: World> {
 /// One sub-goal of a stage, solved before the arm moves.
 struct Planned {
     goal: SubGoal,
-    /// The joints, nearest the previous sub-goal's.
-    joints: Joints,
+    /// The joints, nearest the previous sub-goal's (with a release's or a
+    /// lift's checked straight motion from them).
+    solved: Solved,
     /// How high a release may be raised.
     ceiling: f64,
     /// Microseconds its inverse kinematics took.
@@ -62,14 +63,14 @@ impl<W: World> Scripted<'_, W> {
                 .map_or(g.tip[2], |prev| prev.tip[2]);
             let solved = self.station.solve(g, k + 1, &current, yaw, load, ceiling);
             let took = self.station.spend(k + 1, started)?;
-            let joints = solved?;
+            let solved = solved?;
+            current = solved.joints;
             out.push(Planned {
                 goal: *g,
-                joints,
+                solved,
                 ceiling,
                 solve_us: took * 1e6,
             });
-            current = joints;
         }
         Ok(out)
     }
@@ -149,20 +150,24 @@ impl<W: World> Scripted<'_, W> {
                 },
                 straight => straight,
             };
+            let planned_joints = planned.solved.joints;
             let routed = if replanned {
                 self.station
                     .solve(&planned.goal, k + 1, &start, yaw, load, planned.ceiling)
             } else {
-                Ok(planned.joints)
+                Ok(planned.solved)
             }
-            .and_then(|target| self.station.route_any(how, k + 1, start, target, yaw, load));
+            .and_then(|solved| {
+                self.station
+                    .route_solved(how, k + 1, start, solved, yaw, load)
+            });
             let elapsed = self.station.spend(k + 1, started)?;
             self.station
                 .timing
                 .subgoal_us
                 .push(planned.solve_us + elapsed * 1e6);
             let (goal, route) = routed?;
-            replanned |= goal != planned.joints;
+            replanned |= goal != planned_joints;
             let reached = self.station.tip(&goal);
             self.station.subgoals.push(reached);
             if let Some(info) = info {

@@ -44,6 +44,15 @@ pub struct Route {
     pub samples: Vec<Joints>,
 }
 
+/// A sub-goal's joints ([`Station::solve`]), with the checked straight
+/// motion to them when the solve checked it (a release, a lift): where it
+/// started and its commands.
+#[derive(Debug, Clone)]
+pub struct Solved {
+    pub joints: Joints,
+    straight: Option<(Joints, Route)>,
+}
+
 /// One leg to send: its route, the suction switched at its end, and what
 /// it carries and may touch (owned, so that a leg can wait for the next
 /// stage's: [`Station::send_legs`]).
@@ -347,7 +356,9 @@ impl<'a, W: World> Station<'a, W> {
     /// cannot (the arm's shape at full height differs, and the joint
     /// motion to another shape would drag the product), it is lowered
     /// [`RAISE_STEP`] at a time down to [`MIN_LIFT`] above where the cup
-    /// gripped.
+    /// gripped. The straight motion checked for a release or a lift is
+    /// kept with the joints ([`Solved`]): routing to them from `from`
+    /// ([`Station::route_solved`]) sends it without checking it again.
     pub fn solve(
         &self,
         goal: &SubGoal,
@@ -356,17 +367,28 @@ impl<'a, W: World> Station<'a, W> {
         yaw: f64,
         load: Load,
         ceiling: f64,
-    ) -> Result<Joints, Failure> {
+    ) -> Result<Solved, Failure> {
         if goal.tip.iter().any(|v| !v.is_finite()) {
             return Err(Failure::NonFiniteSubGoal { subgoal: k });
         }
         let lifting = goal.suction == Suction::Keep && load.held.is_some_and(|h| h.leaving_support);
         let solve = |z: f64| {
             let tip = Point3::new(goal.tip[0], goal.tip[1], z);
-            let q = reach(&self.checker, tip, yaw, from, load)?;
-            let blocked = (goal.suction == Suction::Off || lifting)
-                && checked_samples(self.arm, &self.checker, *from, &[q], load).is_err();
-            (!blocked).then_some(q)
+            let joints = reach(&self.checker, tip, yaw, from, load)?;
+            // A release or a lift its straight motion cannot reach is
+            // blocked (None).
+            let straight = if goal.suction == Suction::Off || lifting {
+                let samples =
+                    checked_samples(self.arm, &self.checker, *from, &[joints], load).ok()?;
+                let route = Route {
+                    waypoints: vec![joints],
+                    samples,
+                };
+                Some((*from, route))
+            } else {
+                None
+            };
+            Some(Solved { joints, straight })
         };
         solve(goal.tip[2])
             .or_else(|| {
@@ -451,6 +473,25 @@ impl<'a, W: World> Station<'a, W> {
                     rrt::search(&query, from, to, &config).ok_or(Failure::NoPath { subgoal: k })?;
                 self.checked(k, from, path.get(1..).unwrap_or(&[]), load)
             }
+        }
+    }
+
+    /// The checked commands from `from` to a solved sub-goal: the
+    /// straight motion its solve checked, when that started at `from`;
+    /// else [`Station::route_any`]. `load` must be the one it was solved
+    /// with (a release's and a lift's are not guarded).
+    pub fn route_solved(
+        &self,
+        how: Connect,
+        k: usize,
+        from: Joints,
+        solved: Solved,
+        yaw: f64,
+        load: Load,
+    ) -> Result<(Joints, Route), Failure> {
+        match solved.straight {
+            Some((start, route)) if start == from => Ok((solved.joints, route)),
+            _ => self.route_any(how, k, from, solved.joints, yaw, load),
         }
     }
 

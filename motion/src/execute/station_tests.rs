@@ -207,3 +207,60 @@ fn straight_shares_skip_only_points_proved_far() {
     }
     assert!(partial > 150, "{partial} legs left the clearance");
 }
+
+/// A release solved from `from` is routed from there with the straight
+/// motion its solve checked, the same route `route_any` finds by checking
+/// it again; from anywhere else it is routed anew. A hover (no switch)
+/// keeps no motion.
+#[test]
+fn a_solved_release_is_routed_with_the_motion_its_solve_checked() {
+    let arm = Arm::ur10();
+    let task = OrderTask {
+        cell: common::bench_cell(),
+        products: Vec::new(),
+        assignment: Vec::new(),
+    };
+    let start = home(&arm, &task.cell).expect("a start pose");
+    let sim = Simulator::new(arm.clone(), &task.cell, &[], start).expect("a simulation");
+    let mut world = Recording {
+        sim,
+        commands: Vec::new(),
+        switches: Vec::new(),
+    };
+    let station = Station::new(&mut world, &arm, &task);
+    let above = SubGoal {
+        tip: [0.6, -0.3, 0.3],
+        suction: Suction::Keep,
+    };
+    let hover = station
+        .solve(&above, 1, &start, 0.0, Load::FREE, 0.3)
+        .expect("reachable");
+    assert!(hover.straight.is_none(), "a hover keeps no motion");
+    let release = SubGoal {
+        tip: [0.6, -0.3, 0.1],
+        suction: Suction::Off,
+    };
+    let solved = station
+        .solve(&release, 2, &hover.joints, 0.0, Load::FREE, 0.3)
+        .expect("reachable");
+    assert!(
+        solved.straight.is_some(),
+        "a release keeps its checked motion"
+    );
+    let how = Connect::Straight;
+    let anew = station
+        .route_any(how, 2, hover.joints, solved.joints, 0.0, Load::FREE)
+        .expect("free");
+    let kept = station
+        .route_solved(how, 2, hover.joints, solved.clone(), 0.0, Load::FREE)
+        .expect("free");
+    assert_eq!(kept, anew);
+    // From elsewhere: routed anew, to the same joints.
+    let (to, route) = station
+        .route_solved(how, 2, start, solved.clone(), 0.0, Load::FREE)
+        .expect("free");
+    assert_eq!(to, solved.joints);
+    let (first, last) = (route.samples.first(), route.samples.last());
+    assert!(first.is_some_and(|q| joint_distance(q, &start) < 1e-6));
+    assert!(last.is_some_and(|q| joint_distance(q, &solved.joints) < 1e-6));
+}
