@@ -24,7 +24,7 @@ pub mod world;
 pub use joints::{DOF, Joints, Limits};
 pub use outcome::{
     Budget, Failure, Fallback, FallbackKind, Hit, Outcome, PlannerKind, ProductReport, Report,
-    SUCCESS_RADIUS, Shortfall, Stage, Timing, Violation,
+    SUCCESS_RADIUS, Shortfall, Stage, SubGoalKind, Timing, Violation,
 };
 pub use policy::{Choice, Graph, Node, Policy, SequenceRule, SubGoalQuery};
 pub use scene::{BoxSpec, CellScene, DEFAULT_MASS, Placement, ProductSpec, SlotSpec};

@@ -27,6 +27,53 @@ impl fmt::Display for Stage {
     }
 }
 
+/// What a sub-goal is for, in the order a product's motion passes them:
+/// each stage's three sub-goals ([`SubGoalKind::of`]), then the back-up
+/// from the release.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SubGoalKind {
+    /// Above the product to pick.
+    Hover,
+    /// Onto its top face (the guarded descent; the suction switches on).
+    Contact,
+    /// Up with the product gripped.
+    Lift,
+    /// On the way to the box, carrying it.
+    Approach,
+    /// Above its slot.
+    AboveSlot,
+    /// Down into the slot (the suction switches off).
+    Release,
+    /// Back up from the released product.
+    BackUp,
+}
+
+impl SubGoalKind {
+    /// The three sub-goals of `stage`, in order.
+    pub fn of(stage: Stage) -> [SubGoalKind; 3] {
+        use SubGoalKind::*;
+        match stage {
+            Stage::Picking => [Hover, Contact, Lift],
+            Stage::Placing => [Approach, AboveSlot, Release],
+        }
+    }
+}
+
+impl fmt::Display for SubGoalKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            SubGoalKind::Hover => "hover",
+            SubGoalKind::Contact => "contact",
+            SubGoalKind::Lift => "lift",
+            SubGoalKind::Approach => "approach",
+            SubGoalKind::AboveSlot => "above slot",
+            SubGoalKind::Release => "release",
+            SubGoalKind::BackUp => "back-up",
+        })
+    }
+}
+
 /// Which planner packs: the scripted expert, the expert's sub-goals joined
 /// by RRT-Connect (the paper's baseline), or the learned networks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -454,9 +501,28 @@ pub struct Timing {
     /// planner the same sub-goals (the back-up after a release among
     /// them).
     pub subgoal_us: Vec<f64>,
+    /// What each of `subgoal_us` was for, in the same order (both are
+    /// pushed together by [`Timing::subgoal`]).
+    pub subgoal_kinds: Vec<SubGoalKind>,
     /// Learned planner only: one sub-goal planner call plus the first
     /// dynamics policy call of its rollout (sub-goals with a rollout).
     pub network_us: Vec<f64>,
+}
+
+impl Timing {
+    /// Records a sub-goal's planning time.
+    pub fn subgoal(&mut self, kind: SubGoalKind, us: f64) {
+        self.subgoal_us.push(us);
+        self.subgoal_kinds.push(kind);
+    }
+
+    /// Each sub-goal's kind and planning time.
+    pub fn subgoals(&self) -> impl Iterator<Item = (SubGoalKind, f64)> + '_ {
+        self.subgoal_kinds
+            .iter()
+            .copied()
+            .zip(self.subgoal_us.iter().copied())
+    }
 }
 
 /// The result of packing one order.

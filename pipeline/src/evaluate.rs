@@ -6,7 +6,9 @@ use crate::error::Result;
 use crate::stats::{Interval, mean, quantile, wilson};
 use packwright_compiler::Compiled;
 use packwright_compiler::expand::Setup;
-use packwright_interface::outcome::{FallbackKind, Outcome, PlannerKind, Report, Timing};
+use packwright_interface::outcome::{
+    FallbackKind, Outcome, PlannerKind, Report, SubGoalKind, Timing,
+};
 use packwright_interface::{Policy, World};
 use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
@@ -165,6 +167,9 @@ pub struct Row {
     pub violations: usize,
     pub decision_us: Spread,
     pub subgoal_us: Spread,
+    /// `subgoal_us` by what the sub-goals are for (the hover, the lift,
+    /// ...; `--json` only): where a planner's planning time goes.
+    pub subgoal_us_by_kind: BTreeMap<SubGoalKind, Spread>,
     pub network_us: Spread,
     pub failures: Vec<CaseFailure>,
     pub execution_s_per_product: Option<f64>,
@@ -230,6 +235,10 @@ impl Row {
         for kind in runs.iter().flat_map(|(_, r)| r.fallbacks.iter()) {
             *kinds.entry(kind.to_string()).or_default() += 1;
         }
+        let mut by_kind: BTreeMap<SubGoalKind, Vec<f64>> = BTreeMap::new();
+        for (kind, us) in runs.iter().flat_map(|(_, r)| r.timing.subgoals()) {
+            by_kind.entry(kind).or_default().push(us);
+        }
         Row {
             suite: suite.to_owned(),
             cell: cell.to_owned(),
@@ -248,6 +257,10 @@ impl Row {
             violations: runs.iter().map(|(_, r)| r.violations).sum(),
             decision_us: Spread::of(&all(|t| &t.decision_us)),
             subgoal_us: Spread::of(&all(|t| &t.subgoal_us)),
+            subgoal_us_by_kind: by_kind
+                .into_iter()
+                .map(|(kind, us)| (kind, Spread::of(&us)))
+                .collect(),
             network_us: Spread::of(&all(|t| &t.network_us)),
             failures: runs
                 .iter()
@@ -317,4 +330,56 @@ pub fn markdown(rows: &[Row]) -> String {
         ));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(subgoals: &[(SubGoalKind, f64)]) -> Run {
+        let mut timing = Timing::default();
+        for &(kind, us) in subgoals {
+            timing.subgoal(kind, us);
+        }
+        Run {
+            success: true,
+            failure: None,
+            fallbacks: Vec::new(),
+            violations: 0,
+            timing,
+            execution_s: Vec::new(),
+            bound_s: Vec::new(),
+        }
+    }
+
+    /// A row's sub-goal times by kind hold each planner's own sub-goals
+    /// of that kind over every scenario, and together all of them.
+    #[test]
+    fn subgoal_times_are_spread_by_kind_per_planner() {
+        use SubGoalKind::*;
+        let case =
+            |name: &str, learned: &[(SubGoalKind, f64)], rrt: &[(SubGoalKind, f64)]| CaseResult {
+                name: name.to_owned(),
+                reasoner: None,
+                runs: vec![
+                    (PlannerKind::Learned, run(learned)),
+                    (PlannerKind::Rrt, run(rrt)),
+                ],
+            };
+        let cases = [
+            case("a", &[(Hover, 10.0), (Contact, 1.0)], &[(Hover, 50.0)]),
+            case("b", &[(Hover, 30.0), (BackUp, 7.0)], &[(Release, 5.0)]),
+        ];
+        let row = Row::of("s", "c", None, PlannerKind::Learned, None, &cases);
+        let kinds: Vec<_> = row.subgoal_us_by_kind.keys().copied().collect();
+        assert_eq!(kinds, [Hover, Contact, BackUp]);
+        let hover = &row.subgoal_us_by_kind[&Hover];
+        assert_eq!(hover.n, 2);
+        assert_eq!(hover.median, quantile(&[10.0, 30.0], 0.5));
+        assert_eq!(row.subgoal_us.n, 4);
+        let rrt = Row::of("s", "c", None, PlannerKind::Rrt, None, &cases);
+        let kinds: Vec<_> = rrt.subgoal_us_by_kind.keys().copied().collect();
+        assert_eq!(kinds, [Hover, Release]);
+        assert_eq!(rrt.subgoal_us_by_kind[&Hover].median, Some(50.0));
+    }
 }

@@ -21,7 +21,8 @@ use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
 use nalgebra::{Isometry3, Vector3};
 use packwright_interface::outcome::{
-    Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, Violation,
+    Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, SubGoalKind,
+    Violation,
 };
 use packwright_interface::record;
 use packwright_interface::{Graph, OrderTask, Policy, SequenceRule, SubGoalQuery, World};
@@ -353,7 +354,8 @@ impl<W: World> Learned<'_, W> {
         let mut legs = pending;
         // The product as it will hang once gripped.
         let mut gripped: Option<Held> = None;
-        for (k, switch) in schedule(plan.stage).into_iter().enumerate() {
+        let kinds = SubGoalKind::of(plan.stage);
+        for ((k, switch), kind) in schedule(plan.stage).into_iter().enumerate().zip(kinds) {
             let load = gripped.as_ref().map_or(plan.load, Load::holding);
             // The motion onto a top face is the guarded descent.
             let load = if switch == Suction::On {
@@ -477,7 +479,7 @@ impl<W: World> Learned<'_, W> {
                 }
             };
             let elapsed = self.station.spend(k + 1, started)?;
-            self.station.timing.subgoal_us.push(elapsed * 1e6);
+            self.station.timing.subgoal(kind, elapsed * 1e6);
             if let Some(end) = route.waypoints.last() {
                 start = *end;
             }
@@ -558,7 +560,9 @@ impl<W: World> Learned<'_, W> {
         };
         // Timed as a sub-goal, as the other planners' back-up is.
         let elapsed = self.station.spend(1, started)?;
-        self.station.timing.subgoal_us.push(elapsed * 1e6);
+        self.station
+            .timing
+            .subgoal(SubGoalKind::BackUp, elapsed * 1e6);
         Ok(Leg::new(route, Suction::Keep, load))
     }
 

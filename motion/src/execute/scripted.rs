@@ -10,7 +10,7 @@ use super::station::{
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction};
 use nalgebra::Vector3;
-use packwright_interface::outcome::{Failure, Outcome, PlannerKind, Report, Stage};
+use packwright_interface::outcome::{Failure, Outcome, PlannerKind, Report, Stage, SubGoalKind};
 use packwright_interface::record::{self, ActionSample, MotionLog, SubGoalSample};
 use packwright_interface::{OrderTask, World};
 use packwright_kinematics::{Arm, Joints};
@@ -136,7 +136,9 @@ impl<W: World> Scripted<'_, W> {
         let mut replanned = false;
         let mut legs = pending;
         let descent = self.station.task.cell.descent;
-        for ((k, planned), load) in plan.into_iter().enumerate().zip(loads) {
+        // No stage: the back-up from a release.
+        let kinds = info.map_or([SubGoalKind::BackUp; 3], |i| SubGoalKind::of(i.stage));
+        for (((k, planned), load), kind) in plan.into_iter().enumerate().zip(loads).zip(kinds) {
             // The motion onto a top face is the guarded descent.
             let load = if planned.goal.suction == Suction::On {
                 load.guarded(descent)
@@ -164,8 +166,7 @@ impl<W: World> Scripted<'_, W> {
             let elapsed = self.station.spend(k + 1, started)?;
             self.station
                 .timing
-                .subgoal_us
-                .push(planned.solve_us + elapsed * 1e6);
+                .subgoal(kind, planned.solve_us + elapsed * 1e6);
             let (goal, route) = routed?;
             replanned |= goal != planned_joints;
             let reached = self.station.tip(&goal);
