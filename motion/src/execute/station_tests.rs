@@ -39,24 +39,31 @@ impl World for Recording {
     }
 }
 
+/// The bench cell with no products, the arm at home there, and its
+/// simulation recording commands and switches.
+fn empty_bench_cell(arm: &Arm) -> (OrderTask, Joints, Recording) {
+    let task = OrderTask {
+        cell: common::bench_cell(),
+        products: Vec::new(),
+        assignment: Vec::new(),
+    };
+    let start = home(arm, &task.cell).expect("a start pose");
+    let sim = Simulator::new(arm.clone(), &task.cell, &[], start).expect("a simulation");
+    let world = Recording {
+        sim,
+        commands: Vec::new(),
+        switches: Vec::new(),
+    };
+    (task, start, world)
+}
+
 /// A leg that does not move but switches the suction (its sub-goal
 /// already reached) switches where the leg before it ends, at rest:
 /// the blend must stop there, not pass through it.
 #[test]
 fn a_switch_on_a_leg_that_does_not_move_happens_at_rest() {
     let arm = Arm::ur10();
-    let task = OrderTask {
-        cell: common::bench_cell(),
-        products: Vec::new(),
-        assignment: Vec::new(),
-    };
-    let start = home(&arm, &task.cell).expect("a start pose");
-    let sim = Simulator::new(arm.clone(), &task.cell, &[], start).expect("a simulation");
-    let mut world = Recording {
-        sim,
-        commands: Vec::new(),
-        switches: Vec::new(),
-    };
+    let (task, start, mut world) = empty_bench_cell(&arm);
     let mut station = Station::new(&mut world, &arm, &task);
     let at = |x: f64, y: f64, z: f64| {
         reach(
@@ -215,18 +222,7 @@ fn straight_shares_skip_only_points_proved_far() {
 #[test]
 fn a_solved_release_is_routed_with_the_motion_its_solve_checked() {
     let arm = Arm::ur10();
-    let task = OrderTask {
-        cell: common::bench_cell(),
-        products: Vec::new(),
-        assignment: Vec::new(),
-    };
-    let start = home(&arm, &task.cell).expect("a start pose");
-    let sim = Simulator::new(arm.clone(), &task.cell, &[], start).expect("a simulation");
-    let mut world = Recording {
-        sim,
-        commands: Vec::new(),
-        switches: Vec::new(),
-    };
+    let (task, start, mut world) = empty_bench_cell(&arm);
     let station = Station::new(&mut world, &arm, &task);
     let above = SubGoal {
         tip: [0.6, -0.3, 0.3],
