@@ -501,9 +501,10 @@ pub struct Timing {
     /// planner the same sub-goals (the back-up after a release among
     /// them).
     pub subgoal_us: Vec<f64>,
-    /// What each of `subgoal_us` was for, in the same order (both are
-    /// pushed together by [`Timing::subgoal`]).
-    pub subgoal_kinds: Vec<SubGoalKind>,
+    /// What each of `subgoal_us` was for, in the same order: set only by
+    /// [`Timing::subgoal`], which pushes both; read through
+    /// [`Timing::subgoals`].
+    subgoal_kinds: Vec<SubGoalKind>,
     /// Learned planner only: one sub-goal planner call plus the first
     /// dynamics policy call of its rollout (sub-goals with a rollout).
     pub network_us: Vec<f64>,
