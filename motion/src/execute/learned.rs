@@ -32,6 +32,9 @@ use std::time::Instant;
 /// Via points of the vertical retreat from a release, when the straight
 /// joint motion up would touch the box.
 const RETREAT_VIAS: usize = 5;
+/// Segments of a learned descent down the cup tip's straight line, when
+/// the straight joint motion would touch a wall ([`descent_vias`]).
+const DESCENT_VIAS: usize = 5;
 /// Most dynamics-policy steps per sub-goal: a 180-degree swing takes 12
 /// full steps, and near 180 degrees, where both ways round are as short,
 /// the policy takes a few steps to commit to one; the last steps, near the
@@ -142,6 +145,45 @@ pub fn policy_steps(
         (q, flange) = cup_down_from(arm, base, &q, &flange, step)?;
         steps.push(q);
     }
+}
+
+/// Via points from `start` down the straight line of the cup tip to
+/// `end`'s tip, each reached by the policy's steps ([`policy_steps`])
+/// within `tolerance`, then `end`: [`DESCENT_VIAS`] segments. A straight
+/// joint motion down into a slot bows sideways (measured: 5-7 mm at the
+/// middle of a 14 cm descent), which with a learned release a few
+/// millimetres off touches the wall of a narrow box. `None` when the
+/// motion is not a descent (it goes sideways at least half as far as it
+/// goes down), or the steps fall short or leave the limits.
+pub fn descent_vias(
+    arm: &Arm,
+    base: &Isometry3<f64>,
+    suction: f64,
+    start: Joints,
+    end: Joints,
+    tolerance: f64,
+    action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
+) -> Option<Vec<Joints>> {
+    let tip = |q: &Joints| -> [f64; 3] { arm.tool_tip(base, q, suction).coords.into() };
+    let (a, b) = (tip(&start), tip(&end));
+    let drop = a[2] - b[2];
+    if drop <= 0.0 || 2.0 * (b[0] - a[0]).hypot(b[1] - a[1]) >= drop {
+        return None;
+    }
+    let mut near = start;
+    let mut vias = Vec::with_capacity(DESCENT_VIAS);
+    for i in 1..DESCENT_VIAS {
+        let f = i as f64 / DESCENT_VIAS as f64;
+        let via: [f64; 3] = std::array::from_fn(|j| a[j] + (b[j] - a[j]) * f);
+        let steps = policy_steps(arm, base, suction, near, via, tolerance, action).ok()?;
+        near = steps.last().copied().unwrap_or(near);
+        if !arm.within_limits(&near) {
+            return None;
+        }
+        vias.push(near);
+    }
+    vias.push(end);
+    Some(vias)
 }
 
 /// How far above the expert's release (m) a learned release whose motion
@@ -274,12 +316,29 @@ impl<W: World> Learned<'_, W> {
         };
         match route(vec![end]) {
             Ok(route) => Ok(route),
-            // Through every step instead (passing through them), when they
-            // stay within the limits.
-            Err(straight) if steps.iter().all(|q| s.arm.within_limits(q)) => {
-                route(steps).map_err(|_| why(straight))
+            Err(straight) => {
+                // A descent (into a slot, onto a top face) whose straight
+                // joint motion bows sideways into a wall: down the tip's
+                // straight line instead, as the expert's straight descent
+                // and the back-up from a release go.
+                let act = &mut |q: &Joints, delta: [f64; 3]| {
+                    self.policy
+                        .action(f32s(delta), [q[0] as f32, q[1] as f32, q[2] as f32])
+                };
+                let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
+                if let Some(vias) = descent_vias(arm, base, suction, start, end, tolerance, act)
+                    && let Ok(route) = route(vias)
+                {
+                    return Ok(route);
+                }
+                // Through every step instead (passing through them), when
+                // they stay within the limits.
+                if steps.iter().all(|q| s.arm.within_limits(q)) {
+                    route(steps).map_err(|_| why(straight))
+                } else {
+                    Err(why(straight))
+                }
             }
-            Err(straight) => Err(why(straight)),
         }
     }
 
@@ -833,6 +892,55 @@ mod tests {
             q = cup_down(arm, base, &q, step)?;
             steps.push(q);
         }
+    }
+
+    /// Down into a slot, the straight joint motion's tip leaves the
+    /// vertical line by millimetres; the descent's via points keep to it,
+    /// each within the tolerance, and end where the motion ends. A motion
+    /// mostly sideways is no descent.
+    #[test]
+    fn a_descent_keeps_to_the_tips_straight_line_where_the_joint_motion_bows() {
+        let arm = Arm::ur10();
+        let base = Isometry3::identity();
+        let suction = 0.1;
+        let (x, y, yaw) = (0.55, 0.25, 0.3);
+        let tip = |q: &Joints| -> [f64; 3] { arm.tool_tip(&base, q, suction).coords.into() };
+        let at = |p: [f64; 3], near: &Joints| {
+            arm.tool_down_ik(&base, Point3::from(p), yaw, suction, near)
+        };
+        let start = at([x, y, 0.25], &[0.0, -1.5, 1.5, -1.6, -1.6, 0.0]).expect("reachable");
+        let end = at([x, y, 0.11], &start).expect("reachable");
+        // The expert's step towards the joints of the tip it is sent to.
+        let mut act = |q: &Joints, delta: [f64; 3]| {
+            let t = tip(q);
+            let goal = at(std::array::from_fn(|j| t[j] + delta[j]), q).unwrap_or(*q);
+            record::action(q, &goal).map(|v| v as f32)
+        };
+        let off_line = |q: &Joints| {
+            let t = tip(q);
+            (t[0] - x).hypot(t[1] - y)
+        };
+        let middle: Joints = std::array::from_fn(|j| (start[j] + end[j]) / 2.0);
+        assert!(off_line(&middle) > 0.003, "bows {} m", off_line(&middle));
+        let tolerance = REACHED;
+        let vias =
+            descent_vias(&arm, &base, suction, start, end, tolerance, &mut act).expect("a descent");
+        assert_eq!(vias.len(), DESCENT_VIAS);
+        assert_eq!(vias.last(), Some(&end));
+        for (i, q) in vias.iter().enumerate() {
+            let z = 0.25 - 0.14 * (i + 1) as f64 / DESCENT_VIAS as f64;
+            assert!(off_line(q) <= tolerance, "via {i} {} m off", off_line(q));
+            assert!(
+                (tip(q)[2] - z).abs() <= tolerance,
+                "via {i} at {:?}",
+                tip(q)
+            );
+        }
+        let aside = at([x, y + 0.2, 0.11], &start).expect("reachable");
+        assert_eq!(
+            descent_vias(&arm, &base, suction, start, aside, tolerance, &mut act),
+            None
+        );
     }
 
     /// Random actions from cup-down starts give the very same steps, tips
