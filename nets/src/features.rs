@@ -179,11 +179,12 @@ fn polar(p: [f32; 3], base: [f32; 3]) -> (f32, f32) {
 /// cell to cell and the release depends on both (the box's depth below
 /// its rim, the product's height above its floor): in metres the planner
 /// fitted the rim's part only three quarters of the way (releases 5 mm
-/// low in boxes 60 mm deep, 6 mm high in boxes 100 mm deep, where the
-/// expert lets go 5 mm above the floor). Nothing says where the feature is around or away from the
-/// base: the expert's sub-goals do not depend on it, and a model that
-/// could not see it cannot learn to depend on it (a slot at a radius no
-/// demonstration used is planned for like the others).
+/// low in boxes 60 mm deep, 5-7 mm high in boxes 100 mm deep, where the
+/// expert lets go 5 mm above the floor). Nothing says where the feature
+/// is around or away from the base: the expert's sub-goals do not depend
+/// on it, and a model that could not see it cannot learn to depend on it
+/// (a slot at a radius no demonstration used is planned for like the
+/// others).
 pub fn subgoal_input(q: &SubGoalQuery) -> [f32; SUBGOAL_INPUTS] {
     let (rf, af) = polar(q.feature, q.base);
     let (rt, at) = polar(q.tool, q.base);

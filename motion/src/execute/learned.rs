@@ -32,8 +32,8 @@ use std::time::Instant;
 /// Via points of the vertical retreat from a release, when the straight
 /// joint motion up would touch the box.
 const RETREAT_VIAS: usize = 5;
-/// Segments of a learned descent down the cup tip's straight line, when
-/// the straight joint motion would touch a wall ([`descent_vias`]).
+/// Segments of a learned descent down the vertical over its end, when the
+/// straight joint motion would touch a wall ([`descent_vias`]).
 const DESCENT_VIAS: usize = 5;
 /// Most dynamics-policy steps per sub-goal: a 180-degree swing takes 12
 /// full steps, and near 180 degrees, where both ways round are as short,
@@ -147,14 +147,19 @@ pub fn policy_steps(
     }
 }
 
-/// Via points from `start` down the straight line of the cup tip to
-/// `end`'s tip, each reached by the policy's steps ([`policy_steps`])
-/// within `tolerance`, then `end`: [`DESCENT_VIAS`] segments. A straight
-/// joint motion down into a slot bows sideways (measured: 5-7 mm at the
-/// middle of a 14 cm descent), which with a learned release a few
-/// millimetres off touches the wall of a narrow box. `None` when the
-/// motion is not a descent (it goes sideways at least half as far as it
-/// goes down), or the steps fall short or leave the limits.
+/// Via points from `start` across to above `end`'s cup tip (at the
+/// start's height; none when it is already within `tolerance`), then down
+/// the vertical line to it, each reached by the policy's steps
+/// ([`policy_steps`]) within `tolerance`, then `end`: at most
+/// [`DESCENT_VIAS`] segments. A straight joint motion down into a slot
+/// bows sideways (measured: 5-7 mm at the middle of a 14 cm descent),
+/// and a learned "above the slot" is a few millimetres beside the learned
+/// release, so that even the tip's straight line slants: either way a
+/// held product enters a narrow box beside its slot and touches the
+/// wall. Going down vertically over the learned release, it enters where
+/// it is let go. `None` when the motion is not a descent (it goes
+/// sideways at least half as far as it goes down), or the steps fall
+/// short or leave the limits.
 pub fn descent_vias(
     arm: &Arm,
     base: &Isometry3<f64>,
@@ -173,8 +178,11 @@ pub fn descent_vias(
     let mut near = start;
     let mut vias = Vec::with_capacity(DESCENT_VIAS);
     for i in 1..DESCENT_VIAS {
-        let f = i as f64 / DESCENT_VIAS as f64;
-        let via: [f64; 3] = std::array::from_fn(|j| a[j] + (b[j] - a[j]) * f);
+        let f = (i - 1) as f64 / (DESCENT_VIAS - 1) as f64;
+        let via = [b[0], b[1], a[2] + (b[2] - a[2]) * f];
+        if i == 1 && (via[0] - a[0]).hypot(via[1] - a[1]) <= tolerance {
+            continue;
+        }
         let steps = policy_steps(arm, base, suction, near, via, tolerance, action).ok()?;
         near = steps.last().copied().unwrap_or(near);
         if !arm.within_limits(&near) {
@@ -318,8 +326,8 @@ impl<W: World> Learned<'_, W> {
             Ok(route) => Ok(route),
             Err(straight) => {
                 // A descent (into a slot, onto a top face) whose straight
-                // joint motion bows sideways into a wall: down the tip's
-                // straight line instead, as the expert's straight descent
+                // joint motion bows sideways into a wall: across to above
+                // its end, then down the vertical, as the expert's descent
                 // and the back-up from a release go.
                 let act = &mut |q: &Joints, delta: [f64; 3]| {
                     self.policy
@@ -895,11 +903,12 @@ mod tests {
     }
 
     /// Down into a slot, the straight joint motion's tip leaves the
-    /// vertical line by millimetres; the descent's via points keep to it,
-    /// each within the tolerance, and end where the motion ends. A motion
-    /// mostly sideways is no descent.
+    /// vertical line by millimetres; the descent's via points go across to
+    /// it at the start's height (when the start is beside it) and keep to
+    /// it on the way down, each within the tolerance, and end where the
+    /// motion ends. A motion mostly sideways is no descent.
     #[test]
-    fn a_descent_keeps_to_the_tips_straight_line_where_the_joint_motion_bows() {
+    fn a_descent_goes_down_the_vertical_over_the_release_where_the_joint_motion_bows() {
         let arm = Arm::ur10();
         let base = Isometry3::identity();
         let suction = 0.1;
@@ -908,8 +917,8 @@ mod tests {
         let at = |p: [f64; 3], near: &Joints| {
             arm.tool_down_ik(&base, Point3::from(p), yaw, suction, near)
         };
-        let start = at([x, y, 0.25], &[0.0, -1.5, 1.5, -1.6, -1.6, 0.0]).expect("reachable");
-        let end = at([x, y, 0.11], &start).expect("reachable");
+        let home = [0.0, -1.5, 1.5, -1.6, -1.6, 0.0];
+        let end = at([x, y, 0.11], &home).expect("reachable");
         // The expert's step towards the joints of the tip it is sent to.
         let mut act = |q: &Joints, delta: [f64; 3]| {
             let t = tip(q);
@@ -920,22 +929,33 @@ mod tests {
             let t = tip(q);
             (t[0] - x).hypot(t[1] - y)
         };
-        let middle: Joints = std::array::from_fn(|j| (start[j] + end[j]) / 2.0);
-        assert!(off_line(&middle) > 0.003, "bows {} m", off_line(&middle));
         let tolerance = REACHED;
-        let vias =
-            descent_vias(&arm, &base, suction, start, end, tolerance, &mut act).expect("a descent");
-        assert_eq!(vias.len(), DESCENT_VIAS);
-        assert_eq!(vias.last(), Some(&end));
-        for (i, q) in vias.iter().enumerate() {
-            let z = 0.25 - 0.14 * (i + 1) as f64 / DESCENT_VIAS as f64;
-            assert!(off_line(q) <= tolerance, "via {i} {} m off", off_line(q));
-            assert!(
-                (tip(q)[2] - z).abs() <= tolerance,
-                "via {i} at {:?}",
-                tip(q)
-            );
+        // Straight above the release, and 6 mm beside it (as a learned
+        // "above the slot" may be): the vias go across first, then down.
+        for (beside, across) in [(0.0, false), (0.006, true)] {
+            let start = at([x + beside, y, 0.25], &end).expect("reachable");
+            let middle: Joints = std::array::from_fn(|j| (start[j] + end[j]) / 2.0);
+            assert!(off_line(&middle) > 0.003, "bows {} m", off_line(&middle));
+            let vias = descent_vias(&arm, &base, suction, start, end, tolerance, &mut act)
+                .expect("a descent");
+            assert_eq!(vias.len(), DESCENT_VIAS - usize::from(!across));
+            assert_eq!(vias.last(), Some(&end));
+            let down = &vias[usize::from(across)..];
+            if across {
+                assert!(off_line(&vias[0]) <= tolerance, "{:?}", tip(&vias[0]));
+                assert!((tip(&vias[0])[2] - 0.25).abs() <= tolerance);
+            }
+            for (i, q) in down.iter().enumerate() {
+                let z = 0.25 - 0.14 * (i + 1) as f64 / (DESCENT_VIAS - 1) as f64;
+                assert!(off_line(q) <= tolerance, "via {i} {} m off", off_line(q));
+                assert!(
+                    (tip(q)[2] - z).abs() <= tolerance,
+                    "via {i} at {:?}",
+                    tip(q)
+                );
+            }
         }
+        let start = at([x, y, 0.25], &end).expect("reachable");
         let aside = at([x, y + 0.2, 0.11], &start).expect("reachable");
         assert_eq!(
             descent_vias(&arm, &base, suction, start, aside, tolerance, &mut act),
