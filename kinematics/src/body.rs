@@ -74,9 +74,13 @@ impl ArmPart {
 }
 
 /// The arm's parts, each grown by `padding`: every link's capsules and
-/// cuboids, and the cup, a capsule of radius [`CUP_RADIUS`] + `padding` down
-/// the flange's z axis whose rounded end stays [`CUP_SHORT`] above the tool
-/// tip whatever the padding.
+/// cuboids, and the cup, a capsule of radius [`CUP_RADIUS`] down the
+/// flange's z axis whose rounded end stays [`CUP_SHORT`] above the tool
+/// tip, grown by `padding` like the rest, downwards too. (Grown only
+/// sideways, its end kept no margin below it: a blended back-up from a
+/// release swung the cup over a box's wall with its end on the rim, free
+/// for the planner and a contact in the simulator. The product the cup
+/// comes down onto is not an obstacle for it: a check ignores it.)
 pub fn arm_parts(arm: &Arm, suction: f64, padding: f64) -> Vec<ArmPart> {
     let mut parts = Vec::new();
     for (i, link) in arm.links.iter().enumerate() {
@@ -99,7 +103,7 @@ pub fn arm_parts(arm: &Arm, suction: f64, padding: f64) -> Vec<ArmPart> {
         }
     }
     let radius = CUP_RADIUS + padding;
-    let end = (suction - CUP_SHORT - radius).max(0.0);
+    let end = (suction - CUP_SHORT - CUP_RADIUS).max(0.0);
     parts.push(ArmPart {
         part: CUP,
         local: arm.flange,
@@ -442,14 +446,15 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_cup_ends_short_of_the_tip_whatever_the_padding() {
+    fn the_cup_ends_short_of_the_tip_and_is_grown_downwards_too() {
         let arm = Arm::ur10();
         for padding in [0.0, PADDING] {
             let parts = arm_parts(&arm, 0.1, padding);
             let cup = parts.iter().find(|p| p.part == CUP).expect("a cup");
             let capsule = cup.shape.as_capsule().expect("a capsule");
             let end = f64::from(capsule.segment.b.z + capsule.radius);
-            assert!((end - (0.1 - CUP_SHORT)).abs() < 1e-6, "{end}");
+            assert!((end - (0.1 - CUP_SHORT + padding)).abs() < 1e-6, "{end}");
+            assert!((f64::from(capsule.radius) - (CUP_RADIUS + padding)).abs() < 1e-6);
         }
         assert!(adjacent(CUP, DOF) && !adjacent(CUP, DOF - 1));
         assert_eq!(part_body(&arm, CUP), Body::Cup);

@@ -51,8 +51,11 @@ fn main() {
     .collect();
     checker.set_products(&cubes);
     let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
+    // The product's motion comes down onto P1's top face: P1 is not an
+    // obstacle for the cup (as a planner's load ignores it).
+    let cup_on_p1 = Load::ignoring("P1");
     let at = |x: f64, y: f64, z: f64| {
-        reach(&checker, Point3::new(x, y, z), 0.0, &ready, Load::FREE).expect("reachable")
+        reach(&checker, Point3::new(x, y, z), 0.0, &ready, cup_on_p1).expect("reachable")
     };
     let product = product_motion::SUBGOALS.map(|[x, y, z]| at(x, y, z));
     let stops = product_motion::STOPS;
@@ -69,7 +72,7 @@ fn main() {
                 black_box(product[0]),
                 &product[3..4],
                 &[],
-                Load::FREE,
+                cup_on_p1,
             )
             .expect("free")
         } else if alone {
@@ -81,7 +84,7 @@ fn main() {
                 black_box(start),
                 &product,
                 &stops,
-                Load::FREE,
+                cup_on_p1,
             )
             .expect("free")
         };

@@ -3,12 +3,12 @@
 //! arm poses near the box and the products they agree. The checker without
 //! padding finds a collision exactly where the simulator reports a contact,
 //! up to the simulator's touch distance: every unpadded hit is a contact,
-//! and every contact is a hit once the arm is grown by that distance. The
-//! one place where the two may differ is the cup's end: the planner keeps
-//! it `CUP_SHORT` above the tool tip whatever its padding, so a contact
-//! within the simulator's touch distance below it can go unseen, and the
-//! reverse at the boundary; such poses are rare (a few per thousand) and
-//! counted.
+//! and every contact is a hit once the arm is grown by that distance, the
+//! cup's end included (it was once grown sideways only, and a contact
+//! within the touch distance below it went unseen: a blended swing over a
+//! box's rim found that gap). The one exception allowed is on the safe
+//! side: an unpadded hit of the cup that the simulator does not report, at
+//! the boundary (1 pose in 2,000 when measured), counted.
 
 mod common;
 use common::bench_cell;
@@ -112,7 +112,7 @@ fn the_planner_and_the_simulator_agree() {
     };
     let (mut hits, mut contacts) = (0, 0);
     let mut disagreements = Vec::new();
-    let mut at_cup_end = 0;
+    let mut cup_boundary = 0;
     for q in poses(&arm, 2000, 11) {
         let mut sim = Simulator::new(arm.clone(), &cell, &placements, q).expect("a valid cell");
         sim.step().expect("steps");
@@ -122,7 +122,7 @@ fn the_planner_and_the_simulator_agree() {
         contacts += usize::from(!reported.is_empty());
         if let (Some(h), true) = (&hit, reported.is_empty()) {
             if matches!(h, Hit::Bodies { a: Body::Cup, .. }) {
-                at_cup_end += 1;
+                cup_boundary += 1;
             } else {
                 disagreements.push(format!(
                     "{q:?}: the planner finds {h}, the simulator nothing"
@@ -130,13 +130,9 @@ fn the_planner_and_the_simulator_agree() {
             }
         }
         if let (Some(c), None) = (reported.first(), grown.check(&q, None, None)) {
-            if c.a == Body::Cup {
-                at_cup_end += 1;
-            } else {
-                disagreements.push(format!(
-                    "{q:?}: the simulator reports {c}, the planner nothing"
-                ));
-            }
+            disagreements.push(format!(
+                "{q:?}: the simulator reports {c}, the planner nothing"
+            ));
         }
     }
     assert!(
@@ -146,8 +142,8 @@ fn the_planner_and_the_simulator_agree() {
         disagreements.join("\n")
     );
     assert!(
-        at_cup_end <= 10,
-        "{at_cup_end} disagreements at the cup's end"
+        cup_boundary <= 5,
+        "{cup_boundary} cup hits the simulator missed"
     );
     // The poses exercise both answers.
     assert!(hits > 200 && hits < 1800, "{hits} hits in 2000 poses");

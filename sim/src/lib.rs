@@ -20,9 +20,10 @@
 //!   and cuboids, moved every step to the forward kinematics of the
 //!   commanded joints. The arm follows commands exactly; the measured joints
 //!   are the commanded ones of the last step.
-//! - **Cup.** A cylinder of radius [`CUP_RADIUS`] on the last link, from
-//!   the flange down to [`CUP_SHORT`] (5 mm) above the tool tip, so that
-//!   the tip reaching a product's top does not shove it.
+//! - **Cup.** A capsule of radius [`CUP_RADIUS`] on the last link, from
+//!   the flange down to [`CUP_SHORT`] (5 mm) above the tool tip (its
+//!   rounded end), so that the tip reaching a product's top does not
+//!   shove it.
 //! - **Suction.** When the suction is turned on, the simulator looks for a
 //!   product whose upward-facing face is within [`SUCTION_REACH`] (5 mm) of
 //!   the tool tip along the face normal, with the tip inside the face; the

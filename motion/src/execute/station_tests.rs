@@ -136,14 +136,6 @@ fn transitions_ignore_nothing_and_stops_keep_their_clearance() {
             yaw: 0.0,
         },
     ]);
-    let ready = READY;
-    let at = |x: f64, y: f64, z: f64| {
-        reach(&checker, Point3::new(x, y, z), 0.0, &ready, Load::FREE).expect("reachable")
-    };
-    let [x, y, z] = common::product_motion::START;
-    let start = at(x, y, z);
-    let waypoints = common::product_motion::SUBGOALS.map(|[x, y, z]| at(x, y, z));
-    let stops = common::product_motion::STOPS;
     let held = Held::under_cup("P", size, cell.suction, nalgebra::Vector3::zeros());
     let lifting = held.clone().leaving_support();
     let load_of = |k: usize| match k {
@@ -151,6 +143,16 @@ fn transitions_ignore_nothing_and_stops_keep_their_clearance() {
         2 => Load::holding(&lifting),
         _ => Load::holding(&held),
     };
+    let ready = READY;
+    // Each sub-goal reached with its leg's load (the cup on P's top face
+    // ignores P).
+    let at = |[x, y, z]: [f64; 3], load: Load| {
+        reach(&checker, Point3::new(x, y, z), 0.0, &ready, load).expect("reachable")
+    };
+    let start = at(common::product_motion::START, Load::FREE);
+    let subgoals = common::product_motion::SUBGOALS;
+    let waypoints: [Joints; 7] = std::array::from_fn(|k| at(subgoals[k], load_of(k)));
+    let stops = common::product_motion::STOPS;
     let b = checked_blend_by(&arm, &checker, start, &waypoints, &stops, load_of).expect("free");
     assert!(b.corners.iter().filter(|c| c.saved > 0.0).count() >= 3);
     let tip = |q: &Joints| arm.tool_tip(checker.base(), q, checker.suction());
