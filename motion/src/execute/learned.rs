@@ -354,8 +354,10 @@ impl<W: World> Learned<'_, W> {
     /// the learned `goal` (raised up to `ceiling` if it is a release), else,
     /// when no free motion reaches it or there is none, to the expert's
     /// sub-goal `k` of the stage (raised up to the expert's previous
-    /// sub-goal's height). The route, and whether it went to the expert's
-    /// sub-goal; the learned sub-goal's failure when neither is reached.
+    /// sub-goal's height; a release whose straight descent from `start`
+    /// collides, through the expert's sub-goal before it). The route, and
+    /// whether it went to the expert's sub-goal; the learned sub-goal's
+    /// failure when neither is reached.
     fn fall_back(
         &self,
         k: usize,
@@ -384,7 +386,31 @@ impl<W: World> Learned<'_, W> {
                 _ if expert[k].suction == Suction::Off => expert[k - 1].tip[2],
                 _ => expert[k].tip[2],
             };
-            rrt(&expert[k], ceiling).map(|route| (route, true))
+            rrt(&expert[k], ceiling)
+                .or_else(|direct| match k {
+                    // A release is solved with its straight descent from
+                    // where the arm is: from a learned "above the slot" a
+                    // few millimetres off, that slants into the wall of a
+                    // narrow box. Through the expert's "above the slot"
+                    // first, then down, as the expert goes.
+                    1.. if expert[k].suction == Suction::Off && !s.late() => {
+                        let above = &expert[k - 1];
+                        let how = Connect::Rrt { seed: self.seed };
+                        let detour = || -> Result<Route, Failure> {
+                            let solved = s.solve(above, k, &start, 0.0, load, above.tip[2])?;
+                            let (over, first) = s.route_solved(how, k, start, solved, 0.0, load)?;
+                            let solved = s.solve(&expert[k], k + 1, &over, 0.0, load, ceiling)?;
+                            let (_, down) = s.route_solved(how, k + 1, over, solved, 0.0, load)?;
+                            Ok(Route {
+                                waypoints: [first.waypoints, down.waypoints].concat(),
+                                samples: [first.samples, down.samples].concat(),
+                            })
+                        };
+                        detour().map_err(|_| direct)
+                    }
+                    _ => Err(direct),
+                })
+                .map(|route| (route, true))
         };
         let Some(goal) = goal else {
             return experts();
