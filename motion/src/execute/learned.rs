@@ -265,6 +265,13 @@ struct Learned<'a, W: World> {
 }
 
 impl<W: World> Learned<'_, W> {
+    /// The dynamics policy's action at joints `q` for `delta` (sub-goal −
+    /// cup tip).
+    fn act(&self, q: &Joints, delta: [f64; 3]) -> [f32; 3] {
+        self.policy
+            .action(f32s(delta), [q[0] as f32, q[1] as f32, q[2] as f32])
+    }
+
     /// The dynamics policy's motion from `start` to `goal`: the checked
     /// commands, or why not. The steps' end point is joined straight when
     /// that is free, else through every step. `first_action_us` gets the
@@ -289,9 +296,7 @@ impl<W: World> Learned<'_, W> {
                 // Only the first call is timed (`get_or_insert` would read
                 // the clock at every step).
                 let called = first_action_us.is_none().then(Instant::now);
-                let action = self
-                    .policy
-                    .action(f32s(delta), [q[0] as f32, q[1] as f32, q[2] as f32]);
+                let action = self.act(q, delta);
                 if let Some(called) = called {
                     *first_action_us = Some(called.elapsed().as_secs_f64() * 1e6);
                 }
@@ -329,10 +334,7 @@ impl<W: World> Learned<'_, W> {
                 // joint motion bows sideways into a wall: across to above
                 // its end, then down the vertical, as the expert's descent
                 // and the back-up from a release go.
-                let act = &mut |q: &Joints, delta: [f64; 3]| {
-                    self.policy
-                        .action(f32s(delta), [q[0] as f32, q[1] as f32, q[2] as f32])
-                };
+                let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
                 let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
                 if let Some(vias) = descent_vias(arm, base, suction, start, end, tolerance, act)
                     && let Ok(route) = route(vias)
