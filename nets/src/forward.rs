@@ -10,9 +10,17 @@
 //! against burn's on random inputs.
 //!
 //! A dense layer is a loop over its inputs adding a weight column times
-//! the input (contiguous, so it vectorises), skipping inputs that are 0:
-//! after a ReLU about half are (`cargo bench -p packwright-nets --bench
-//! learning` measures these passes).
+//! the input (contiguous, so it vectorises), inputs that are 0 included:
+//! after a ReLU about half are, but which ones changes with every policy
+//! step, and a branch to skip them, mispredicted, cost more than the
+//! arithmetic it saved (measured in the learned loop: a policy action took
+//! 0.46 us with the branch, 0.33 without; a warm benchmark with the same
+//! input every call predicts the branch perfectly and says the opposite).
+//! A head narrower than [`NARROW`] outputs (the sub-goal's 3, the latent's
+//! 4, a score's 1) is stored padded with zero columns, so that its block
+//! is one register per row instead of a scalar loop over 3 outputs (that
+//! loop cost as much as the 32 × 32 layer before it). `cargo bench -p
+//! packwright-nets --bench learning` measures these passes.
 
 use crate::features::{
     ACTION_INPUTS, NODE_FEATURES, OWN_FEATURES, PLACE, SLOT_FEATURES, action_input, own_row,
@@ -23,11 +31,18 @@ use crate::features::{
 pub struct Dense {
     inputs: usize,
     outputs: usize,
-    /// burn's layout, row-major [in, out]: the weights from input `j` are
-    /// `w[j * outputs..(j + 1) * outputs]`.
+    /// Columns per input in `w` and `b`: `outputs`, or [`NARROW`] for a
+    /// narrower layer (a head of 1 to 4 outputs), padded with zeros, so
+    /// that its one block is whole registers rather than a scalar loop.
+    stride: usize,
+    /// burn's layout, row-major [in, out] (padded to `stride`): the
+    /// weights from input `j` are `w[j * stride..(j + 1) * stride]`.
     w: Vec<f32>,
     b: Vec<f32>,
 }
+
+/// The width a layer with fewer outputs is padded to ([`Dense`]).
+const NARROW: usize = 8;
 
 impl Dense {
     /// From burn's `weight` (row-major [in, out]) and `bias` ([out];
@@ -43,11 +58,29 @@ impl Dense {
             Some(_) => return None,
             None => vec![0.0; outputs],
         };
-        (weight.len() == inputs * outputs).then_some(Dense {
+        if weight.len() != inputs * outputs {
+            return None;
+        }
+        if outputs >= NARROW || outputs == 0 {
+            return Some(Dense {
+                inputs,
+                outputs,
+                stride: outputs,
+                w: weight,
+                b,
+            });
+        }
+        let pad = |row: &[f32]| {
+            let mut padded = [0.0; NARROW];
+            padded[..outputs].copy_from_slice(row);
+            padded
+        };
+        Some(Dense {
             inputs,
             outputs,
-            w: weight,
-            b,
+            stride: NARROW,
+            w: weight.chunks_exact(outputs).flat_map(pad).collect(),
+            b: pad(&b).to_vec(),
         })
     }
 
@@ -58,11 +91,9 @@ impl Dense {
             .chunks_exact(self.inputs)
             .zip(y.chunks_exact_mut(self.outputs));
         for (row, out) in rows.take(n) {
-            out.copy_from_slice(&self.b);
-            for (&xj, column) in row.iter().zip(self.w.chunks_exact(self.outputs)) {
-                if xj != 0.0 {
-                    axpy(out, column, xj);
-                }
+            out.copy_from_slice(&self.b[..self.outputs]);
+            for (&xj, column) in row.iter().zip(self.w.chunks_exact(self.stride)) {
+                axpy(out, &column[..self.outputs], xj);
             }
         }
     }
@@ -70,7 +101,7 @@ impl Dense {
     /// `W x + b` for `R` rows at once (`x[r]` of `self.inputs` values into
     /// `y[r]` of `self.outputs`), bit for bit what [`Dense::apply_into`]
     /// gives each row: every output gets the same products added in the
-    /// same order, the inputs that are 0 skipped. A block of outputs of
+    /// same order. A block of outputs of
     /// every row stays in registers while the inputs pass, so no output is
     /// stored until its block is done and the rows share one walk over the
     /// weights; with AVX2 the blocks are twice as wide.
@@ -80,7 +111,11 @@ impl Dense {
             // SAFETY: the CPU has AVX2, checked just above.
             return unsafe { self.apply_rows_avx2(x, y) };
         }
-        self.apply_blocks::<R, BLOCK>(x, y);
+        if self.stride == NARROW {
+            self.apply_blocks::<R, NARROW>(x, y);
+        } else {
+            self.apply_blocks::<R, BLOCK>(x, y);
+        }
     }
 
     /// [`Dense::apply_rows`] in 256-bit registers. AVX2 only, not FMA: a
@@ -89,7 +124,11 @@ impl Dense {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn apply_rows_avx2<const R: usize>(&self, x: [&[f32]; R], y: [&mut [f32]; R]) {
-        self.apply_blocks::<R, { 2 * BLOCK }>(x, y);
+        if self.stride == NARROW {
+            self.apply_blocks::<R, NARROW>(x, y);
+        } else {
+            self.apply_blocks::<R, { 2 * BLOCK }>(x, y);
+        }
     }
 
     /// [`Dense::apply_rows`] in blocks of `B` outputs, the last one
@@ -97,12 +136,12 @@ impl Dense {
     /// their instruction sets.
     #[inline(always)]
     fn apply_blocks<const R: usize, const B: usize>(&self, x: [&[f32]; R], mut y: [&mut [f32]; R]) {
-        let whole = self.outputs - self.outputs % B;
+        let whole = self.stride - self.stride % B;
         for start in (0..whole).step_by(B) {
             self.apply_columns::<R, B>(start..start + B, x, &mut y);
         }
-        if whole < self.outputs {
-            self.apply_columns::<R, B>(whole..self.outputs, x, &mut y);
+        if whole < self.stride {
+            self.apply_columns::<R, B>(whole..self.stride, x, &mut y);
         }
     }
 
@@ -124,17 +163,21 @@ impl Dense {
         for a in &mut acc {
             a[..n].copy_from_slice(&self.b[columns.clone()]);
         }
-        for (j, column) in self.w.chunks_exact(self.outputs).enumerate().take(inputs) {
+        for (j, column) in self.w.chunks_exact(self.stride).enumerate().take(inputs) {
             let w = &column[columns.clone()];
             for (a, row) in acc.iter_mut().zip(x) {
-                let xj = row[j];
-                if xj != 0.0 {
-                    axpy(&mut a[..n], w, xj);
-                }
+                axpy(&mut a[..n], w, row[j]);
             }
         }
         for (a, out) in acc.iter().zip(y.iter_mut()) {
-            out[columns.clone()].copy_from_slice(&a[..n]);
+            if columns.end <= self.outputs {
+                out[columns.clone()].copy_from_slice(&a[..n]);
+            } else {
+                // A narrow layer's padding is not an output.
+                let done: [f32; B] = *a;
+                out[columns.start..self.outputs]
+                    .copy_from_slice(&done[..self.outputs - columns.start]);
+            }
         }
     }
 }
@@ -541,14 +584,18 @@ mod tests {
     }
 
     /// Both block widths (SSE's and AVX2's, whichever this CPU would
-    /// take), one row or two, give the bits of one row at a time, on
-    /// widths that leave part of a block and inputs that are 0 or -0.
+    /// take) and the narrow one, one row or two, give the bits of one row
+    /// at a time and of the plain sum over burn's unpadded layout, on
+    /// widths that leave part of a block, heads narrower than a register
+    /// (padded), and inputs that are 0 or -0.
     #[test]
     fn blocked_rows_are_bit_identical_to_one_row_at_a_time() {
-        for (seed, &(inputs, outputs)) in (0..200).zip([(64, 64), (5, 37), (68, 3)].iter().cycle())
-        {
+        let shapes = [(64, 64), (5, 37), (68, 3), (32, 1), (64, 4), (9, 8)];
+        for (seed, &(inputs, outputs)) in (0..300).zip(shapes.iter().cycle()) {
             let mut next = numbers(seed);
-            let layer = dense(inputs, outputs, &mut next);
+            let w: Vec<f32> = (0..inputs * outputs).map(|_| 2.0 * next()).collect();
+            let b: Vec<f32> = (0..outputs).map(|_| next()).collect();
+            let layer = Dense::new(inputs, outputs, w.clone(), Some(b.clone())).expect("shapes");
             let mut row = || -> Vec<f32> {
                 (0..inputs)
                     .map(|_| match next() {
@@ -559,6 +606,15 @@ mod tests {
                     .collect()
             };
             let (x0, x1) = (row(), row());
+            // burn's layout as given, unpadded, one product at a time.
+            let plain = |x: &[f32]| -> Vec<u32> {
+                (0..outputs)
+                    .map(|o| {
+                        let sum = (0..inputs).fold(b[o], |acc, j| acc + x[j] * w[j * outputs + o]);
+                        sum.to_bits()
+                    })
+                    .collect()
+            };
             let one_at_a_time = |x: &[f32]| {
                 let mut y = vec![0.0; outputs];
                 layer.apply_into(x, 1, &mut y);
@@ -580,6 +636,8 @@ mod tests {
             assert_eq!(bits(&y1), one_at_a_time(&x1));
             layer.apply_rows([&x0], [&mut y0]);
             assert_eq!(bits(&y0), one_at_a_time(&x0));
+            layer.apply_blocks::<2, NARROW>([&x0, &x1], [&mut y0, &mut y1]);
+            assert_eq!((bits(&y0), bits(&y1)), (plain(&x0), plain(&x1)));
         }
     }
 
