@@ -16,7 +16,10 @@
 //! function is total: non-finite or unreachable input gives `None`.
 
 mod closed_form;
+mod cup_down;
 mod numeric;
+
+pub use cup_down::CupDownTip;
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
