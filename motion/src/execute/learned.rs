@@ -642,9 +642,10 @@ impl<W: World> Learned<'_, W> {
     }
 
     /// The checked way straight up to the height of `above` (the learned
-    /// "above the slot" sub-goal) from the released product `name`, not
-    /// sent: it is sent with the next product's hover (or alone at the end
-    /// of the run).
+    /// "above the slot" sub-goal) from the released product `name`, its
+    /// end found by the dynamics policy's steps (by inverse kinematics
+    /// where they fall short); not sent: it is sent with the next
+    /// product's hover (or alone at the end of the run).
     fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<Leg, Failure> {
         let load = Load::ignoring(name);
         // The released product where it lies (its last observed place was
@@ -662,7 +663,25 @@ impl<W: World> Learned<'_, W> {
             tip: [x, y, above[2]],
             suction: Suction::Keep,
         };
-        let target = s.solve(&up, 1, &start, 0.0, load, above[2])?.joints;
+        // The dynamics policy's steps up, as every learned motion goes
+        // (a step or two, where inverse kinematics weighs every branch);
+        // inverse kinematics where they fall short.
+        let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
+        let stepped = policy_steps(
+            s.arm,
+            &s.base,
+            s.task.cell.suction,
+            start,
+            up.tip,
+            REACHED,
+            act,
+        )
+        .ok()
+        .and_then(|steps| s.arm.into_limits(steps.last()?, &start));
+        let target = match stepped {
+            Some(q) => q,
+            None => s.solve(&up, 1, &start, 0.0, load, above[2])?.joints,
+        };
         let route = match s.checked(1, start, &[target], load) {
             Ok(route) => route,
             // A straight joint motion bows sideways; from a slot near a
