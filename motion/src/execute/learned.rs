@@ -48,6 +48,12 @@ pub const REACHED: f64 = 0.002;
 /// Any other via point (the lift, the approach) is reached when the cup tip
 /// is this close (m).
 pub const REACHED_VIA: f64 = 0.01;
+/// The policy's steps end the back-up from a release this close (m) to
+/// straight above it: within [`REACHED`], the end's millimetre or two
+/// changed the blend into the next hover (one product of the golden
+/// `pine_trio` took 0.15 s longer); this close, the executed motion is the
+/// inverse kinematics' to the millisecond.
+const BACK_UP_REACHED: f64 = 0.0005;
 
 /// How close the cup tip must come to sub-goal `index` (from 0) of `stage`:
 /// [`REACHED`] where the suction switches and just before, else
@@ -673,7 +679,7 @@ impl<W: World> Learned<'_, W> {
             s.task.cell.suction,
             start,
             up.tip,
-            REACHED,
+            BACK_UP_REACHED,
             act,
         )
         .ok()
