@@ -1,5 +1,6 @@
 //! Kinematics of the built-in UR10: forward kinematics of every link, of the
-//! flange only, and the closed-form and numeric tool-down inverse kinematics.
+//! flange only, the cup tip in closed form along cup-down steps, and the
+//! closed-form and numeric tool-down inverse kinematics.
 
 use std::f64::consts::FRAC_PI_2;
 use std::hint::black_box;
@@ -23,6 +24,15 @@ fn kinematics(c: &mut Criterion) {
     });
     c.bench_function("fk_flange", |b| {
         b.iter(|| arm.flange_pose(black_box(&base), black_box(&q)))
+    });
+    // The cup tip along the learned loop's cup-down steps, in closed form.
+    let down = arm
+        .tool_down_ik(&base, tip, 0.3, suction, &near)
+        .expect("reachable");
+    let at_tip = arm.tool_tip(&base, &down, suction);
+    let closed = arm.cup_down_tip(&base, &down, &at_tip).expect("a UR10");
+    c.bench_function("cup_down_tip_closed_form", |b| {
+        b.iter(|| closed.at(black_box(&down)))
     });
     c.bench_function("ik_closed_form_tool_down", |b| {
         b.iter(|| {
