@@ -8,10 +8,11 @@
 //! `φ = θ2 + θ3 + θ4` and `θ5`; when the cup tip is on joint 6's axis, `θ6`
 //! does not move it, so in the frame joint 2 turns in the tip is
 //!
-//! `P(θ2, θ3) + w`, `P = (a2 cos θ2 + a3 cos(θ2 + θ3), a2 sin θ2 + a3 sin(θ2 + θ3), d4)`
+//! `P(θ2, θ3) + w`, `P = (a2 cos θ2 + a3 cos(θ2 + θ3), a2 sin θ2 + a3 sin(θ2 + θ3), 0)`
 //!
-//! with `w` the same at every step: three sines and cosines per pose
-//! instead of six joint rotations composed.
+//! with `w` (`d4` out of the plane, and the wrist) the same at every step:
+//! three sines and cosines per pose instead of six joint rotations
+//! composed.
 
 use nalgebra::{Isometry3, Point3, Vector3};
 

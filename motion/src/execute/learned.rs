@@ -128,7 +128,9 @@ fn within_limits(arm: &Arm, q: Joints) -> Result<Joints, Shortfall> {
 }
 
 /// The dynamics policy's steps from `start` towards the cup-tip position
-/// `goal`, with forward kinematics, as the learned loop takes them: at
+/// `goal`, with forward kinematics (after the first step the tip in
+/// closed form, [`CupDownTip`], where the arm has one), as the learned
+/// loop takes them: at
 /// most [`MAX_POLICY_STEPS`], each `action(q, delta)` (base, shoulder,
 /// elbow, radians; delta = goal − cup tip) scaled down to 15 degrees, the
 /// wrist keeping the cup down; until the tip is within `tolerance`. The
@@ -167,10 +169,7 @@ pub fn policy_steps(
         match &closed {
             Some(c) => {
                 q = within_limits(arm, stepped(&q, step))?;
-                tip = match c.at(&q) {
-                    Some(tip) => tip,
-                    None => arm.tool_tip(base, &q, suction),
-                };
+                tip = c.at(&q).unwrap_or_else(|| arm.tool_tip(base, &q, suction));
             }
             None => {
                 (q, flange) = cup_down_from(arm, base, &q, &flange, step)?;
