@@ -137,3 +137,25 @@ fn a_release_handed_to_rrt_connect_goes_down_from_the_experts_above_the_slot() {
     assert_eq!(report["complete"], true, "{report}");
     let _ = fs::remove_dir_all(&dir);
 }
+
+/// Found by the same probe (cells 3063 and 3081): a learned hover swung
+/// about half a turn (either way round as short) and ended 4 mrad inside
+/// the base's limit; the descent onto the product, a few milliradians on,
+/// was reachable only a whole turn back, and that swing swept the cup
+/// into the box (RRT-Connect took it over). The swing now ends the other
+/// way round, with room: no fallback.
+#[test]
+fn a_half_turn_swing_ending_at_the_base_limit_goes_the_other_way_round() {
+    let cell = family_cell(3081);
+    let dir = scratch("generalisation", &cell.name);
+    let pack = dir.join(cell.file_name());
+    fs::write(&pack, &cell.text).expect("generated file written");
+    let pack = pack.display().to_string();
+    let scenario = format!("{}/02", cell.suite(SuiteKind::Case1N1).name);
+    let out = packwright(&["execute", &pack, "--scenario", &scenario, "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let report = json(&out);
+    assert_eq!(report["complete"], true, "{report}");
+    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+    let _ = fs::remove_dir_all(&dir);
+}

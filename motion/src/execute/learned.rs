@@ -27,6 +27,7 @@ use packwright_interface::outcome::{
 use packwright_interface::record;
 use packwright_interface::{Graph, OrderTask, Policy, SequenceRule, SubGoalQuery, World};
 use packwright_kinematics::{Arm, CupDownTip, Joints};
+use std::f64::consts::{FRAC_PI_2, TAU};
 use std::time::Instant;
 
 /// Via points of the vertical retreat from a release, when the straight
@@ -228,6 +229,39 @@ pub fn descent_vias(
     Some(vias)
 }
 
+/// Room (rad) a motion's end leaves to the limits of the base and wrist 3,
+/// the joints that turn freely: the sub-goals after a swing move them a
+/// few degrees further.
+const TURN_ROOM: f64 = 0.1;
+
+/// `end` with the base or wrist 3 a whole turn the other way where it ends
+/// within [`TURN_ROOM`] of its limit, when the other turn has that room
+/// and is at most a quarter turn farther from `start`: a swing of about
+/// half a turn (either way round is as short) that ends at the base's
+/// limit leaves the descent onto the product a few milliradians on only a
+/// whole turn back, and that swing sweeps the arm through the cell
+/// (probe cells 3063 and 3081: the cup into the box).
+fn with_room(arm: &Arm, start: &Joints, end: Joints) -> Joints {
+    let mut out = end;
+    for j in [0, end.len() - 1] {
+        let l = &arm.limits[j];
+        let room = |v: f64| (v - l.lower).min(l.upper - v);
+        if room(end[j]) >= TURN_ROOM {
+            continue;
+        }
+        let other = if end[j] - l.lower < l.upper - end[j] {
+            end[j] + TAU
+        } else {
+            end[j] - TAU
+        };
+        let farther = (other - start[j]).abs() - (end[j] - start[j]).abs();
+        if room(other) >= TURN_ROOM && farther <= FRAC_PI_2 {
+            out[j] = other;
+        }
+    }
+    out
+}
+
 /// How far above the expert's release (m) a learned release whose motion
 /// collides may be raised: a learned release a little too low (the held
 /// product pressed into the floor) is let go 1 or 2 cm up, as the expert
@@ -353,6 +387,7 @@ impl<W: World> Learned<'_, W> {
                 value: joint.map_or(f64::NAN, |j| last[j]),
             }
         })?;
+        let end = with_room(s.arm, &start, end);
         let why = |e| match e {
             Unchecked::Collides(hit) => Shortfall::Collides { hit },
             Unchecked::Smoothing(reason) => Shortfall::Smoothing { reason },
@@ -1042,6 +1077,34 @@ mod tests {
             descent_vias(&arm, &base, suction, start, aside, tolerance, &mut act),
             None
         );
+    }
+
+    /// A half-turn swing that ends at the base's limit ends a whole turn
+    /// the other way round instead; one ending at the limit a quarter turn
+    /// on, or with room, or a short step past where the other turn is far,
+    /// is left alone.
+    #[test]
+    fn a_swing_ending_at_the_base_limit_goes_the_other_way_round() {
+        let arm = Arm::ur10();
+        let q = |base: f64, wrist3: f64| [base, -1.2, 2.4, -2.8, -FRAC_PI_2, wrist3];
+        let limit = arm.limits[0].lower;
+        // About half a turn, to within 4 mrad of the limit (probe cell 3081).
+        let start = q(-3.315, -1.744);
+        let end = q(limit + 0.004, -4.708);
+        let turned = with_room(&arm, &start, end);
+        assert!((turned[0] - (limit + 0.004 + TAU)).abs() < 1e-12);
+        assert_eq!(turned[1..], end[1..]);
+        // A quarter turn to the limit: the other way is three quarters.
+        let start = q(limit + FRAC_PI_2, 0.0);
+        assert_eq!(with_room(&arm, &start, end), end);
+        // With room: nothing to do.
+        let roomy = q(limit + 0.2, 0.0);
+        assert_eq!(with_room(&arm, &start, roomy), roomy);
+        // Wrist 3 as well.
+        let start = q(0.0, 3.2);
+        let end = q(0.0, arm.limits[5].upper - 0.01);
+        let turned = with_room(&arm, &start, end);
+        assert!(turned[5] < 0.0, "{turned:?}");
     }
 
     /// Random actions from cup-down starts give the very same steps and
