@@ -1100,6 +1100,11 @@ mod tests {
         // With room: nothing to do.
         let roomy = q(limit + 0.2, 0.0);
         assert_eq!(with_room(&arm, &start, roomy), roomy);
+        // A short step along the limit (a descent after such a swing):
+        // the other turn is a whole turn farther.
+        let start = q(limit + 0.004, 0.0);
+        let step = q(limit + 0.002, 0.0);
+        assert_eq!(with_room(&arm, &start, step), step);
         // Wrist 3 as well.
         let start = q(0.0, 3.2);
         let end = q(0.0, arm.limits[5].upper - 0.01);
