@@ -125,17 +125,8 @@ fn a_model_generalises_on_a_cell_with_box_and_products_on_opposite_sides() {
 /// product not placed. It now goes through the expert's "above the slot".
 #[test]
 fn a_release_handed_to_rrt_connect_goes_down_from_the_experts_above_the_slot() {
-    let cell = family_cell(3078);
-    let dir = scratch("generalisation", &cell.name);
-    let pack = dir.join(cell.file_name());
-    fs::write(&pack, &cell.text).expect("generated file written");
-    let pack = pack.display().to_string();
-    let scenario = format!("{}/02", cell.suite(SuiteKind::Case1N).name);
-    let out = packwright(&["execute", &pack, "--scenario", &scenario, "--json"]);
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
-    let report = json(&out);
+    let report = executes_with_the_bundled_model(3078, SuiteKind::Case1N, "02");
     assert_eq!(report["complete"], true, "{report}");
-    let _ = fs::remove_dir_all(&dir);
 }
 
 /// Found by the same probe (cells 3063 and 3081): a learned hover swung
@@ -146,16 +137,22 @@ fn a_release_handed_to_rrt_connect_goes_down_from_the_experts_above_the_slot() {
 /// way round, with room: no fallback.
 #[test]
 fn a_half_turn_swing_ending_at_the_base_limit_goes_the_other_way_round() {
-    let cell = family_cell(3081);
+    let report = executes_with_the_bundled_model(3081, SuiteKind::Case1N1, "02");
+    assert_eq!(report["complete"], true, "{report}");
+    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+}
+
+/// Scenario `number` of suite `kind` of generated cell `seed`, executed
+/// with the bundled model (exit 0): the JSON report.
+fn executes_with_the_bundled_model(seed: u64, kind: SuiteKind, number: &str) -> serde_json::Value {
+    let cell = family_cell(seed);
     let dir = scratch("generalisation", &cell.name);
     let pack = dir.join(cell.file_name());
     fs::write(&pack, &cell.text).expect("generated file written");
     let pack = pack.display().to_string();
-    let scenario = format!("{}/02", cell.suite(SuiteKind::Case1N1).name);
+    let scenario = format!("{}/{number}", cell.suite(kind).name);
     let out = packwright(&["execute", &pack, "--scenario", &scenario, "--json"]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
-    let report = json(&out);
-    assert_eq!(report["complete"], true, "{report}");
-    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
     let _ = fs::remove_dir_all(&dir);
+    json(&out)
 }
