@@ -28,7 +28,7 @@ use packwright_interface::record;
 use packwright_interface::{Graph, OrderTask, Policy, SequenceRule, SubGoalQuery, World};
 use packwright_kinematics::{Arm, CupDownTip, Joints};
 use std::f64::consts::{FRAC_PI_2, TAU};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Via points of the vertical retreat from a release, when the straight
 /// joint motion up would touch the box.
@@ -270,20 +270,6 @@ fn with_room(arm: &Arm, start: &Joints, end: Joints) -> Joints {
 /// slot).
 const COLLIDING_RELEASE_RAISE: f64 = 0.02;
 
-/// How far (m) a learned grip or release `goal` (sub-goal `k` of `plan`,
-/// where the suction `switch`es) is off the product's centre or the slot,
-/// when that is more than [`SUCCESS_RADIUS`]: it would pack nothing,
-/// however well the arm reached it, and the expert's sub-goal is used
-/// instead (by RRT-Connect).
-fn off_target(plan: &StagePlan, k: usize, switch: Suction, goal: [f64; 3]) -> Option<f64> {
-    (switch != Suction::Keep)
-        .then(|| {
-            let e = plan.expert[k].tip;
-            (goal[0] - e[0]).hypot(goal[1] - e[1])
-        })
-        .filter(|d| *d > SUCCESS_RADIUS)
-}
-
 /// Whether `rolled` is a release (`switch`) whose motion would collide.
 fn release_collides(switch: Suction, rolled: &Result<Route, Shortfall>) -> bool {
     switch == Suction::Off && matches!(rolled, Err(Shortfall::Collides { .. }))
@@ -313,32 +299,6 @@ enum Stopped {
 struct Reached {
     goals: [[f64; 3]; 3],
     tips: [[f64; 3]; 3],
-}
-
-/// The dynamics policy's steps towards a sub-goal ([`Learned::steps_to`]).
-struct Stepped {
-    steps: Vec<Joints>,
-    /// Where the motion along them ends (the last step with the base and
-    /// wrist 3 brought into their limits); none without steps.
-    end: Option<Joints>,
-}
-
-/// A stage's sub-goal planned ahead ([`Learned::prepare`]): its query and
-/// the policy's steps from where the sub-goal before it ends, and, once
-/// checked, the straight motion along them.
-struct Prepared {
-    /// Where the arm starts (the end of the sub-goal before, planned
-    /// ahead too): the stage uses this sub-goal only if it starts there.
-    start: Joints,
-    goal: [f64; 3],
-    /// Microseconds the sub-goal query took.
-    query_us: f64,
-    first_action_us: Option<f64>,
-    stepped: Result<Stepped, Shortfall>,
-    /// The straight motion's check, once done.
-    straight: Option<Result<Route, Unchecked>>,
-    /// Planning time spent on it so far.
-    took: Duration,
 }
 
 /// One stage's inputs.
@@ -381,9 +341,9 @@ impl<W: World> Learned<'_, W> {
     }
 
     /// The dynamics policy's motion from `start` to `goal`: the checked
-    /// commands, or why not ([`Learned::steps_to`], [`Learned::straight`],
-    /// [`Learned::finish`]). `first_action_us` gets the time of the first
-    /// policy call.
+    /// commands, or why not. The steps' end point is joined straight when
+    /// that is free, else through every step. `first_action_us` gets the
+    /// time of the first policy call.
     fn rollout(
         &self,
         start: Joints,
@@ -392,22 +352,6 @@ impl<W: World> Learned<'_, W> {
         load: Load,
         first_action_us: &mut Option<f64>,
     ) -> Result<Route, Shortfall> {
-        let stepped = self.steps_to(start, goal, tolerance, first_action_us)?;
-        let straight = self.straight(start, &stepped, load);
-        self.finish(start, stepped, tolerance, load, straight)
-    }
-
-    /// The dynamics policy's steps from `start` towards `goal` and the
-    /// joints the motion along them ends at (none when `start` is within
-    /// `tolerance` already), or why the steps fall short. `first_action_us`
-    /// gets the time of the first policy call.
-    fn steps_to(
-        &self,
-        start: Joints,
-        goal: [f64; 3],
-        tolerance: f64,
-        first_action_us: &mut Option<f64>,
-    ) -> Result<Stepped, Shortfall> {
         let s = &self.station;
         let steps = policy_steps(
             s.arm,
@@ -428,7 +372,10 @@ impl<W: World> Learned<'_, W> {
             },
         )?;
         let Some(last) = steps.last() else {
-            return Ok(Stepped { steps, end: None });
+            return Ok(Route {
+                waypoints: Vec::new(),
+                samples: Vec::new(),
+            });
         };
         // The base and wrist 3 may have turned past their limits: the same
         // pose a whole turn back, which the straight motion reaches the
@@ -441,40 +388,6 @@ impl<W: World> Learned<'_, W> {
             }
         })?;
         let end = with_room(s.arm, &start, end);
-        Ok(Stepped {
-            steps,
-            end: Some(end),
-        })
-    }
-
-    /// The checked straight joint motion from `start` to the end of
-    /// `stepped` (no commands when there were no steps).
-    fn straight(&self, start: Joints, stepped: &Stepped, load: Load) -> Result<Route, Unchecked> {
-        let Some(end) = stepped.end else {
-            return Ok(Route {
-                waypoints: Vec::new(),
-                samples: Vec::new(),
-            });
-        };
-        let s = &self.station;
-        checked_samples(s.arm, &s.checker, start, &[end], load).map(|samples| Route {
-            waypoints: vec![end],
-            samples,
-        })
-    }
-
-    /// The motion along `stepped` from `start`: the `straight` one when it
-    /// is free, else down the vertical over the end ([`descent_vias`]),
-    /// else through every step; why not.
-    fn finish(
-        &self,
-        start: Joints,
-        stepped: Stepped,
-        tolerance: f64,
-        load: Load,
-        straight: Result<Route, Unchecked>,
-    ) -> Result<Route, Shortfall> {
-        let s = &self.station;
         let why = |e| match e {
             Unchecked::Collides(hit) => Shortfall::Collides { hit },
             Unchecked::Smoothing(reason) => Shortfall::Smoothing { reason },
@@ -483,30 +396,28 @@ impl<W: World> Learned<'_, W> {
             checked_samples(s.arm, &s.checker, start, &waypoints, load)
                 .map(|samples| Route { waypoints, samples })
         };
-        let straight = match (straight, stepped.end) {
-            (Ok(route), _) => return Ok(route),
-            (Err(straight), Some(end)) => (straight, end),
-            (Err(straight), None) => return Err(why(straight)),
-        };
-        let (straight, end) = straight;
-        // A descent (into a slot, onto a top face) whose straight joint
-        // motion bows sideways into a wall: across to above its end, then
-        // down the vertical, as the expert's descent and the back-up from a
-        // release go.
-        let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
-        let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
-        if let Some(vias) = descent_vias(arm, base, suction, start, end, tolerance, act)
-            && let Ok(route) = route(vias)
-        {
-            return Ok(route);
-        }
-        // Through every step instead (passing through them), when they stay
-        // within the limits.
-        let steps = stepped.steps;
-        if steps.iter().all(|q| s.arm.within_limits(q)) {
-            route(steps).map_err(|_| why(straight))
-        } else {
-            Err(why(straight))
+        match route(vec![end]) {
+            Ok(route) => Ok(route),
+            Err(straight) => {
+                // A descent (into a slot, onto a top face) whose straight
+                // joint motion bows sideways into a wall: across to above
+                // its end, then down the vertical, as the expert's descent
+                // and the back-up from a release go.
+                let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
+                let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
+                if let Some(vias) = descent_vias(arm, base, suction, start, end, tolerance, act)
+                    && let Ok(route) = route(vias)
+                {
+                    return Ok(route);
+                }
+                // Through every step instead (passing through them), when
+                // they stay within the limits.
+                if steps.iter().all(|q| s.arm.within_limits(q)) {
+                    route(steps).map_err(|_| why(straight))
+                } else {
+                    Err(why(straight))
+                }
+            }
         }
     }
 
@@ -586,111 +497,6 @@ impl<W: World> Learned<'_, W> {
         }
     }
 
-    /// The sub-goal planner's sub-goal `k` (from 0) of the stage, with the
-    /// arm at `start`; a contact (`switch` on) at the sensed top face.
-    fn query(&self, plan: &StagePlan, k: usize, switch: Suction, start: &Joints) -> [f64; 3] {
-        let mut goal = self
-            .policy
-            .subgoal(&SubGoalQuery {
-                stage: plan.stage,
-                index: k,
-                feature: f32s(plan.feature),
-                tool: f32s(self.station.tip(start)),
-                height: plan.height as f32,
-                base: f32s(self.station.task.cell.base),
-            })
-            .map(f64::from);
-        // A guarded contact: the cup meets the top face where the product
-        // is sensed (its centre plus half its height), as a vacuum sensor
-        // would stop the descent; x and y stay learned.
-        if let (Suction::On, Some(top)) = (switch, plan.contact) {
-            goal[2] = top;
-        }
-        goal
-    }
-
-    /// The stage's sub-goals planned ahead from `start`, as
-    /// [`Learned::stage`] goes when every straight motion is free: each
-    /// one's query and the policy's steps from where the one before ends
-    /// (up to the first the stage would not roll out: a non-finite or
-    /// off-target sub-goal, steps that leave the limits or fall short),
-    /// then the straight motions' checks, the last sub-goal's first (up to
-    /// the first that collides). RRT-Connect's stage goes the same way: it
-    /// solves every sub-goal, with the lift's or release's straight motion
-    /// checked, before it routes the hover or the approach. A check warms
-    /// the checker for the next: the first check after the arm moved is
-    /// slower (measured: 5-8% per command, a few microseconds on a long
-    /// motion), and it falls on the stage's short last motion rather than
-    /// on its long first one.
-    fn prepare(&self, plan: &StagePlan, mut start: Joints) -> Vec<Prepared> {
-        let mut out = Vec::new();
-        for (k, switch) in schedule(plan.stage).into_iter().enumerate() {
-            let began = Instant::now();
-            let goal = self.query(plan, k, switch, &start);
-            let query_us = began.elapsed().as_secs_f64() * 1e6;
-            if goal.iter().any(|v| !v.is_finite()) || off_target(plan, k, switch, goal).is_some() {
-                break;
-            }
-            let mut first_action_us = None;
-            let tolerance = tolerance(plan.stage, k);
-            let stepped = self.steps_to(start, goal, tolerance, &mut first_action_us);
-            let next = stepped.as_ref().ok().map(|s| s.end.unwrap_or(start));
-            out.push(Prepared {
-                start,
-                goal,
-                query_us,
-                first_action_us,
-                stepped,
-                straight: None,
-                took: began.elapsed(),
-            });
-            match next {
-                Some(next) => start = next,
-                None => break,
-            }
-        }
-        // Each sub-goal's load, as the stage's: after a contact, the
-        // product as it hangs from the cup at the contact's end.
-        let held: Vec<Option<Held>> = out
-            .iter()
-            .enumerate()
-            .scan(None, |gripped, (k, p)| {
-                let now = gripped.clone();
-                let switch = schedule(plan.stage)[k];
-                if let (Suction::On, Some(size), Some(top), Ok(stepped)) =
-                    (switch, plan.gripped, plan.contact, &p.stepped)
-                {
-                    let end = stepped.end.unwrap_or(p.start);
-                    *gripped = Some(self.gripped_at(&end, plan, size, top));
-                }
-                Some(now)
-            })
-            .collect();
-        let n = out.len();
-        for k in (n.saturating_sub(1)..n).chain(0..n.saturating_sub(1)) {
-            let began = Instant::now();
-            let switch = schedule(plan.stage)[k];
-            let load = held[k].as_ref().map_or(plan.load, Load::holding);
-            let load = if switch == Suction::On {
-                load.guarded(self.station.task.cell.descent)
-            } else {
-                load
-            };
-            let p = &mut out[k];
-            let Ok(stepped) = &p.stepped else {
-                continue;
-            };
-            let straight = self.straight(p.start, stepped, load);
-            let free = straight.is_ok();
-            p.straight = Some(straight);
-            p.took += began.elapsed();
-            if !free {
-                break;
-            }
-        }
-        out
-    }
-
     /// One stage with learned sub-goals and motions, planned from where
     /// the `pending` legs of the stage before end (else from where the arm
     /// is) and sent after them ([`Station::send_legs`]; with `keep_tail`,
@@ -705,14 +511,13 @@ impl<W: World> Learned<'_, W> {
         let mut fallen = false;
         let mut goals = [[0.0; 3]; 3];
         let mut tips = [[0.0; 3]; 3];
+        let base = f32s(self.station.task.cell.base);
         // The stage is planned to its end before the arm moves, each
         // sub-goal from where the one before leaves the arm.
         let mut start = leg_end(&pending).unwrap_or_else(|| self.station.world.observe().joints);
         let mut legs = pending;
         // The product as it will hang once gripped.
         let mut gripped: Option<Held> = None;
-        let mut prepared: Vec<Option<Prepared>> =
-            self.prepare(plan, start).into_iter().map(Some).collect();
         let kinds = SubGoalKind::of(plan.stage);
         for ((k, switch), kind) in schedule(plan.stage).into_iter().enumerate().zip(kinds) {
             let load = gripped.as_ref().map_or(plan.load, Load::holding);
@@ -722,24 +527,30 @@ impl<W: World> Learned<'_, W> {
             } else {
                 load
             };
-            // A sub-goal planned ahead from where the arm now starts; one
-            // planned from elsewhere (a sub-goal before went another way)
-            // is dropped, its time spent all the same.
-            let ahead = prepared.get_mut(k).and_then(Option::take);
-            let spent = ahead.as_ref().map_or(Duration::ZERO, |p| p.took);
-            let ahead = ahead.filter(|p| p.start == start);
-            let started = self.station.resume(spent);
-            let (goal, subgoal_us) = match &ahead {
-                Some(p) => (p.goal, p.query_us),
-                None => {
-                    let goal = self.query(plan, k, switch, &start);
-                    (goal, started.elapsed().as_secs_f64() * 1e6)
-                }
-            };
+            let started = self.station.begin();
+            let tool = f32s(self.station.tip(&start));
+            let mut goal = self
+                .policy
+                .subgoal(&SubGoalQuery {
+                    stage: plan.stage,
+                    index: k,
+                    feature: f32s(plan.feature),
+                    tool,
+                    height: plan.height as f32,
+                    base,
+                })
+                .map(f64::from);
+            // A guarded contact: the cup meets the top face where the
+            // product is sensed (its centre plus half its height), as a
+            // vacuum sensor would stop the descent; x and y stay learned.
+            if let (Suction::On, Some(top)) = (switch, plan.contact) {
+                goal[2] = top;
+            }
             if goal.iter().any(|v| !v.is_finite()) {
                 return Err(Failure::NonFiniteSubGoal { subgoal: k + 1 });
             }
             goals[k] = goal;
+            let subgoal_us = started.elapsed().as_secs_f64() * 1e6;
             // A release the wrist cannot reach is raised, as the expert's
             // is, up to the previous sub-goal's height.
             let ceiling = if switch == Suction::Off && k > 0 {
@@ -747,23 +558,20 @@ impl<W: World> Learned<'_, W> {
             } else {
                 goal[2]
             };
-            let off = off_target(plan, k, switch, goal);
+            // A learned grip or release off the product's centre or the slot
+            // would pack nothing, however well the arm reached it: the
+            // expert's sub-goal is used instead (by RRT-Connect).
+            let off = (switch != Suction::Keep)
+                .then(|| {
+                    let e = plan.expert[k].tip;
+                    (goal[0] - e[0]).hypot(goal[1] - e[1])
+                })
+                .filter(|d| *d > SUCCESS_RADIUS);
             let rolled = (!fallen && off.is_none()).then(|| {
                 let tolerance = tolerance(plan.stage, k);
                 let mut first_action_us = None;
                 // The first attempt's shortfall is the one reported.
-                let mut rolled = match ahead {
-                    Some(p) => {
-                        first_action_us = p.first_action_us;
-                        p.stepped.and_then(|stepped| {
-                            let straight = p
-                                .straight
-                                .unwrap_or_else(|| self.straight(start, &stepped, load));
-                            self.finish(start, stepped, tolerance, load, straight)
-                        })
-                    }
-                    None => self.rollout(start, goal, tolerance, load, &mut first_action_us),
-                };
+                let mut rolled = self.rollout(start, goal, tolerance, load, &mut first_action_us);
                 // A release whose motion collides is raised only as far
                 // as one too low needs: up to COLLIDING_RELEASE_RAISE above
                 // the expert's.
@@ -834,7 +642,7 @@ impl<W: World> Learned<'_, W> {
                     route
                 }
             };
-            let elapsed = self.station.spend_took(k + 1, spent + started.elapsed())?;
+            let elapsed = self.station.spend(k + 1, started)?;
             self.station.timing.subgoal(kind, elapsed * 1e6);
             if let Some(end) = route.waypoints.last() {
                 start = *end;

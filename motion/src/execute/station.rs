@@ -294,19 +294,6 @@ impl<'a, W: World> Station<'a, W> {
         now
     }
 
-    /// [`Station::begin`] for a sub-goal `spent` has gone into already
-    /// (planned ahead): its deadline that much sooner.
-    pub fn resume(&mut self, spent: Duration) -> Instant {
-        let now = Instant::now();
-        let left = self
-            .budget
-            .package
-            .saturating_sub(self.package_planning + spent);
-        let subgoal = self.budget.subgoal.saturating_sub(spent);
-        self.deadline = Some(now + subgoal.min(left));
-        now
-    }
-
     /// Whether the sub-goal being planned is past its deadline.
     pub fn late(&self) -> bool {
         self.deadline.is_some_and(|d| Instant::now() >= d)
@@ -316,12 +303,7 @@ impl<'a, W: World> Station<'a, W> {
     /// counts for the product and the package, and a budget it overran
     /// stops the run. The seconds it took.
     pub fn spend(&mut self, k: usize, started: Instant) -> Result<f64, Failure> {
-        self.spend_took(k, started.elapsed())
-    }
-
-    /// [`Station::spend`] for a sub-goal `k` (from 1) that `took` this long
-    /// in all (planned in parts).
-    pub fn spend_took(&mut self, k: usize, took: Duration) -> Result<f64, Failure> {
+        let took = started.elapsed();
         self.deadline = None;
         self.clock.planning_s += took.as_secs_f64();
         self.package_planning += took;
