@@ -142,6 +142,26 @@ fn a_half_turn_swing_ending_at_the_base_limit_goes_the_other_way_round() {
     assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
 }
 
+/// Development cell 2005 (`packwright generate --seed 2005`): a learned
+/// release a few millimetres off in a narrow box, where the held product
+/// touched the wall, went to RRT-Connect and the expert's release. It is
+/// now moved just inside the walls: no fallback.
+#[test]
+fn a_release_against_the_wall_of_a_narrow_box_is_moved_inside() {
+    let report = executes_with_the_bundled_model(2005, SuiteKind::Case1N1, "01");
+    assert_eq!(report["complete"], true, "{report}");
+    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+}
+
+/// Development cell 2173: the same with the cup itself against the wall
+/// of a deep box, above a small product (two fallbacks before).
+#[test]
+fn a_release_whose_cup_touches_the_wall_of_a_deep_box_is_moved_inside() {
+    let report = executes_with_the_bundled_model(2173, SuiteKind::Case1N, "01");
+    assert_eq!(report["complete"], true, "{report}");
+    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+}
+
 /// Scenario `number` of suite `kind` of generated cell `seed`, executed
 /// with the bundled model (exit 0): the JSON report.
 fn executes_with_the_bundled_model(seed: u64, kind: SuiteKind, number: &str) -> serde_json::Value {

@@ -537,8 +537,10 @@ fn a_release_off_the_slot_is_not_tried() {
 /// (the product's padded box to the wall), a learned release 15 mm towards
 /// the wall (within the success radius) collides with the wall at any height
 /// up to 2 cm above the expert's release, and is not raised higher (let go
-/// from there, the product would drop off its slot): RRT-Connect goes to the
-/// expert's release, and the fallback says why.
+/// from there, the product would drop off its slot), nor moved 9 mm back
+/// inside the walls (at most 6 mm): RRT-Connect goes to the
+/// expert's release, and the fallback says why. One 9 mm towards the wall
+/// is moved back inside it: no fallback.
 #[test]
 fn a_colliding_release_is_raised_a_little_then_goes_to_the_experts() {
     let assign = [("A", "g1"), ("D", "g5")];
@@ -563,6 +565,12 @@ fn a_colliding_release_is_raised_a_little_then_goes_to_the_experts() {
     let report = moved(cell.clone(), [0.0; 3]);
     assert_packed(&report);
     assert!(report.fallbacks.is_empty(), "{:#?}", report.fallbacks);
+    // 9 mm towards the wall, 1 mm into it: moved back inside the walls
+    // (3 mm, to 2 mm inside them), no fallback.
+    let report = moved(cell.clone(), [0.0, -0.009, 0.0]);
+    assert_packed(&report);
+    assert!(report.fallbacks.is_empty(), "{:#?}", report.fallbacks);
+    // 15 mm: more than a small move from where it was learned.
     let report = moved(cell, [0.0, -0.015, 0.0]);
     assert_packed(&report);
     let [f] = report.fallbacks.as_slice() else {

@@ -19,13 +19,15 @@ use super::station::{
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use packwright_interface::outcome::{
     Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, SubGoalKind,
     Violation,
 };
 use packwright_interface::record;
+use packwright_interface::scene::CellScene;
 use packwright_interface::{Graph, OrderTask, Policy, SequenceRule, SubGoalQuery, World};
+use packwright_kinematics::body::{BOX_WALL, CUP_RADIUS, HELD_PADDING, PADDING};
 use packwright_kinematics::{Arm, CupDownTip, Joints};
 use std::f64::consts::{FRAC_PI_2, TAU};
 use std::time::Instant;
@@ -270,6 +272,12 @@ fn with_room(arm: &Arm, start: &Joints, end: Joints) -> Joints {
 /// slot).
 const COLLIDING_RELEASE_RAISE: f64 = 0.02;
 
+/// How far (m) a colliding release may be moved to keep its product and
+/// the cup inside the box's walls ([`Inside::keep`]): about twice the
+/// sub-goal planner's error at a release on cells it was not taught, well
+/// within [`SUCCESS_RADIUS`].
+const KEEP_INSIDE: f64 = 0.006;
+
 /// Whether `rolled` is a release (`switch`) whose motion would collide.
 fn release_collides(switch: Suction, rolled: &Result<Route, Shortfall>) -> bool {
     switch == Suction::Off && matches!(rolled, Err(Shortfall::Collides { .. }))
@@ -320,6 +328,72 @@ struct StagePlan<'l> {
     /// The expert's sub-goals for the stage: where RRT-Connect goes
     /// instead of a learned sub-goal it cannot reach.
     expert: [SubGoal; 3],
+    /// Placing: where the cup tip may let go with the held product and
+    /// the cup clear of the box's walls ([`Inside`]).
+    inside: Option<Inside>,
+}
+
+/// The cup-tip positions (x and y, m) from which a held product, let go,
+/// stands clear of its box's inner walls by its padding and the policy's
+/// reach ([`REACHED`]), with the cup clear of them too when the tip is
+/// below the rim: the box's inside shrunk by the product's half-extents in
+/// the world (moved by where the product hangs from the cup) and by the
+/// cup's padded radius. An axis where they do not fit is left as it is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Inside {
+    /// For the product: lowest and highest x, then y.
+    product: [(f64, f64); 2],
+    /// For the cup.
+    cup: [(f64, f64); 2],
+    /// The box's rim height: the cup goes into the box below it.
+    rim: f64,
+}
+
+impl Inside {
+    /// For a product of `size` hanging `grip` (world x, y: its centre
+    /// minus the cup tip) from a flange turned by `flange`, let go in
+    /// `cell`'s box `b`.
+    fn new(
+        cell: &CellScene,
+        b: usize,
+        size: [f64; 3],
+        grip: [f64; 2],
+        flange: &UnitQuaternion<f64>,
+    ) -> Option<Inside> {
+        let held = cell.boxes.get(b)?;
+        let m = flange.to_rotation_matrix().into_inner();
+        let half = [size[0] / 2.0, size[1] / 2.0, size[2] / 2.0];
+        let extent = |row: usize| (0..3).map(|j| m[(row, j)].abs() * half[j]).sum::<f64>();
+        // The inside's bounds on `axis` shrunk by `by`, for a tip `shift`
+        // from the body kept inside.
+        let bound = |axis: usize, by: f64, shift: f64| {
+            let c = held.centre[axis];
+            let w = held.size[axis] / 2.0 - BOX_WALL - by - REACHED;
+            (c - w - shift, c + w - shift)
+        };
+        Some(Inside {
+            product: [0, 1].map(|a| bound(a, extent(a) + HELD_PADDING, grip[a])),
+            cup: [0, 1].map(|a| bound(a, CUP_RADIUS + PADDING, 0.0)),
+            rim: held.size[2],
+        })
+    }
+
+    /// `goal` moved into the inside on each axis where everything fits
+    /// (the nearest such point); `None` when that changes nothing.
+    fn keep(&self, goal: [f64; 3]) -> Option<[f64; 3]> {
+        let mut kept = goal;
+        for axis in 0..2 {
+            let (mut lo, mut hi) = self.product[axis];
+            if goal[2] < self.rim {
+                lo = lo.max(self.cup[axis].0);
+                hi = hi.min(self.cup[axis].1);
+            }
+            if lo <= hi {
+                kept[axis] = goal[axis].clamp(lo, hi);
+            }
+        }
+        (kept != goal).then_some(kept)
+    }
 }
 
 /// The learned loop over the shared stepping primitives.
@@ -594,6 +668,20 @@ impl<W: World> Learned<'_, W> {
                     }
                     raised += 1;
                 }
+                // A release whose product or cup would touch the box's
+                // wall (a learned sub-goal a few millimetres off in a
+                // tight box): moved just inside the walls, when that is
+                // near.
+                if release_collides(switch, &rolled)
+                    && !self.station.late()
+                    && let Some(kept) = plan.inside.and_then(|i| i.keep(goal))
+                    && (kept[0] - goal[0]).hypot(kept[1] - goal[1]) <= KEEP_INSIDE
+                    && let Ok(route) =
+                        self.rollout(start, kept, tolerance, load, &mut first_action_us)
+                {
+                    goals[k] = kept;
+                    rolled = Ok(route);
+                }
                 if let Some(action_us) = first_action_us {
                     self.station.timing.network_us.push(subgoal_us + action_us);
                 }
@@ -829,6 +917,7 @@ impl<W: World> Learned<'_, W> {
                 load: Load::ignoring(name),
                 gripped: Some(spec.size),
                 expert: expert::picking(centre, spec.size[2], cell.lift),
+                inside: None,
             },
             backup,
             true,
@@ -896,6 +985,7 @@ impl<W: World> Learned<'_, W> {
                 load: Load::holding(&held),
                 gripped: None,
                 expert,
+                inside: Inside::new(cell, cell.slots[s].box_index, spec.size, grip, &flange),
             },
             lift,
             false,
@@ -973,6 +1063,78 @@ pub(super) fn run<W: World>(
 mod tests {
     use super::*;
     use nalgebra::Point3;
+    use packwright_interface::scene::BoxSpec;
+
+    /// A cell with one box, 350 mm wide and 80 mm deep, 80 mm high,
+    /// centred at (-0.2, 0.65): 36 mm from its centre line to the inside
+    /// of its long walls.
+    fn narrow_box() -> CellScene {
+        CellScene {
+            name: "narrow".into(),
+            base: [0.0, 0.0, 0.0],
+            suction: 0.085,
+            lift: 0.1,
+            speed: 1.0,
+            grip_settle: 0.1,
+            release_settle: 0.5,
+            descent: 1.0,
+            pending: ([0.0, 0.0], [0.1, 0.1]),
+            boxes: vec![BoxSpec {
+                name: "carton".into(),
+                centre: [-0.2, 0.65],
+                size: [0.35, 0.08, 0.08],
+            }],
+            slots: Vec::new(),
+        }
+    }
+
+    /// The cup pointing down, turned by `yaw`.
+    fn down(yaw: f64) -> UnitQuaternion<f64> {
+        UnitQuaternion::from_euler_angles(0.0, 0.0, yaw)
+            * UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0)
+    }
+
+    #[test]
+    fn a_release_against_a_wall_is_kept_inside_the_box() {
+        let cell = narrow_box();
+        // A 60 mm deep product: 36 - 30 - 3 mm padding - 2 mm reach
+        // leaves 1 mm either way of the centre line.
+        let inside = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(0.0))
+            .expect("the box exists");
+        let at = |y: f64| [-0.2, 0.65 + y, 0.06];
+        assert_eq!(inside.keep(at(0.0005)), None, "already inside");
+        let kept = inside.keep(at(0.003)).expect("moved");
+        assert!((kept[1] - 0.651).abs() < 1e-9, "{kept:?}");
+        assert_eq!((kept[0], kept[2]), (-0.2, 0.06), "x and z stay");
+        let kept = inside.keep(at(-0.003)).expect("moved");
+        assert!((kept[1] - 0.649).abs() < 1e-9, "{kept:?}");
+        // Hanging 2 mm off the cup towards +y, the cup lets go 2 mm lower.
+        let off = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.002], &down(0.0))
+            .expect("the box exists");
+        let kept = off.keep(at(0.0)).expect("moved");
+        assert!((kept[1] - 0.649).abs() < 1e-9, "{kept:?}");
+        // Turned a quarter, the product's 60 mm lie along x: in y it is
+        // 40 mm, and the cup (20 mm and 10 mm padding) is the bound.
+        let turned = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(FRAC_PI_2))
+            .expect("the box exists");
+        let kept = turned.keep(at(0.006)).expect("moved");
+        assert!((kept[1] - 0.654).abs() < 1e-9, "{kept:?}");
+        // Above the rim, the cup is not in the box: the product's bound.
+        let high = [-0.2, 0.665, 0.09];
+        assert!((turned.keep(high).expect("moved")[1] - 0.661).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_product_wider_than_the_box_is_not_moved() {
+        let cell = narrow_box();
+        let inside = Inside::new(&cell, 0, [0.04, 0.075, 0.05], [0.0, 0.0], &down(0.0))
+            .expect("the box exists");
+        assert_eq!(inside.keep([-0.2, 0.653, 0.06]), None);
+        assert_eq!(
+            Inside::new(&cell, 1, [0.04, 0.04, 0.05], [0.0, 0.0], &down(0.0)),
+            None
+        );
+    }
 
     /// A way of stepping the policy, with the signature of [`policy_steps`].
     type Stepper = fn(
