@@ -566,7 +566,7 @@ fn a_colliding_release_is_raised_a_little_then_goes_to_the_experts() {
     assert_packed(&report);
     assert!(report.fallbacks.is_empty(), "{:#?}", report.fallbacks);
     // 9 mm towards the wall, 1 mm into it: moved back inside the walls
-    // (3 mm, to 2 mm inside them), no fallback.
+    // (2 mm, to 1 mm inside them), no fallback.
     let report = moved(cell.clone(), [0.0, -0.009, 0.0]);
     assert_packed(&report);
     assert!(report.fallbacks.is_empty(), "{:#?}", report.fallbacks);

@@ -273,10 +273,16 @@ fn with_room(arm: &Arm, start: &Joints, end: Joints) -> Joints {
 const COLLIDING_RELEASE_RAISE: f64 = 0.02;
 
 /// How far (m) a colliding release may be moved to keep its product and
-/// the cup inside the box's walls ([`Inside::keep`]): about twice the
+/// the cup inside the box's walls ([`Inside::keep`]; the policy then
+/// reaches it within [`BACK_UP_REACHED`]): about twice the
 /// sub-goal planner's error at a release on cells it was not taught, well
 /// within [`SUCCESS_RADIUS`].
 const KEEP_INSIDE: f64 = 0.006;
+
+/// How far (m) a kept release ([`Inside`]) stays inside the padded
+/// walls: it is reached within [`BACK_UP_REACHED`], and as far again is
+/// left for rounding and the flange's small tilt.
+const KEPT_MARGIN: f64 = 2.0 * BACK_UP_REACHED;
 
 /// Whether `rolled` is a release (`switch`) whose motion would collide.
 fn release_collides(switch: Suction, rolled: &Result<Route, Shortfall>) -> bool {
@@ -334,8 +340,8 @@ struct StagePlan<'l> {
 }
 
 /// The cup-tip positions (x and y, m) from which a held product, let go,
-/// stands clear of its box's inner walls by its padding and the policy's
-/// reach ([`REACHED`]), with the cup clear of them too when the tip is
+/// stands clear of its box's inner walls by its padding and
+/// [`KEPT_MARGIN`], with the cup clear of them too when the tip is
 /// below the rim: the box's inside shrunk by the product's half-extents in
 /// the world (moved by where the product hangs from the cup) and by the
 /// cup's padded radius. An axis where they do not fit is left as it is.
@@ -368,7 +374,7 @@ impl Inside {
         // from the body kept inside.
         let bound = |axis: usize, by: f64, shift: f64| {
             let c = held.centre[axis];
-            let w = held.size[axis] / 2.0 - BOX_WALL - by - REACHED;
+            let w = held.size[axis] / 2.0 - BOX_WALL - by - KEPT_MARGIN;
             (c - w - shift, c + w - shift)
         };
         Some(Inside {
@@ -677,7 +683,7 @@ impl<W: World> Learned<'_, W> {
                     && let Some(kept) = plan.inside.and_then(|i| i.keep(goal))
                     && (kept[0] - goal[0]).hypot(kept[1] - goal[1]) <= KEEP_INSIDE
                     && let Ok(route) =
-                        self.rollout(start, kept, tolerance, load, &mut first_action_us)
+                        self.rollout(start, kept, BACK_UP_REACHED, load, &mut first_action_us)
                 {
                     goals[k] = kept;
                     rolled = Ok(route);
@@ -1097,31 +1103,31 @@ mod tests {
     #[test]
     fn a_release_against_a_wall_is_kept_inside_the_box() {
         let cell = narrow_box();
-        // A 60 mm deep product: 36 - 30 - 3 mm padding - 2 mm reach
-        // leaves 1 mm either way of the centre line.
+        // A 60 mm deep product: 36 - 30 - 3 mm padding - 1 mm margin
+        // leaves 2 mm either way of the centre line.
         let inside = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(0.0))
             .expect("the box exists");
         let at = |y: f64| [-0.2, 0.65 + y, 0.06];
-        assert_eq!(inside.keep(at(0.0005)), None, "already inside");
-        let kept = inside.keep(at(0.003)).expect("moved");
-        assert!((kept[1] - 0.651).abs() < 1e-9, "{kept:?}");
+        assert_eq!(inside.keep(at(0.0015)), None, "already inside");
+        let kept = inside.keep(at(0.004)).expect("moved");
+        assert!((kept[1] - 0.652).abs() < 1e-9, "{kept:?}");
         assert_eq!((kept[0], kept[2]), (-0.2, 0.06), "x and z stay");
-        let kept = inside.keep(at(-0.003)).expect("moved");
-        assert!((kept[1] - 0.649).abs() < 1e-9, "{kept:?}");
+        let kept = inside.keep(at(-0.004)).expect("moved");
+        assert!((kept[1] - 0.648).abs() < 1e-9, "{kept:?}");
         // Hanging 2 mm off the cup towards +y, the cup lets go 2 mm lower.
         let off = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.002], &down(0.0))
             .expect("the box exists");
-        let kept = off.keep(at(0.0)).expect("moved");
-        assert!((kept[1] - 0.649).abs() < 1e-9, "{kept:?}");
+        let kept = off.keep(at(0.001)).expect("moved");
+        assert!((kept[1] - 0.65).abs() < 1e-9, "{kept:?}");
         // Turned a quarter, the product's 60 mm lie along x: in y it is
         // 40 mm, and the cup (20 mm and 10 mm padding) is the bound.
         let turned = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(FRAC_PI_2))
             .expect("the box exists");
-        let kept = turned.keep(at(0.006)).expect("moved");
-        assert!((kept[1] - 0.654).abs() < 1e-9, "{kept:?}");
+        let kept = turned.keep(at(0.007)).expect("moved");
+        assert!((kept[1] - 0.655).abs() < 1e-9, "{kept:?}");
         // Above the rim, the cup is not in the box: the product's bound.
         let high = [-0.2, 0.665, 0.09];
-        assert!((turned.keep(high).expect("moved")[1] - 0.661).abs() < 1e-9);
+        assert!((turned.keep(high).expect("moved")[1] - 0.662).abs() < 1e-9);
     }
 
     #[test]
