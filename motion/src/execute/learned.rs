@@ -1114,7 +1114,8 @@ mod tests {
         assert_eq!((kept[0], kept[2]), (-0.2, 0.06), "x and z stay");
         let kept = inside.keep(at(-0.004)).expect("moved");
         assert!((kept[1] - 0.648).abs() < 1e-9, "{kept:?}");
-        // Hanging 2 mm off the cup towards +y, the cup lets go 2 mm lower.
+        // Hanging 2 mm off the cup towards +y, the cup lets go 2 mm further
+        // towards -y.
         let off = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.002], &down(0.0))
             .expect("the box exists");
         let kept = off.keep(at(0.001)).expect("moved");
