@@ -537,8 +537,8 @@ fn a_release_off_the_slot_is_not_tried() {
 /// (the product's padded box to the wall), a learned release 15 mm towards
 /// the wall (within the success radius) collides with the wall at any height
 /// up to 2 cm above the expert's release, and is not raised higher (let go
-/// from there, the product would drop off its slot), nor moved 9 mm back
-/// inside the walls (at most 6 mm): RRT-Connect goes to the
+/// from there, the product would drop off its slot), nor moved the 8 mm
+/// back inside the walls (at most 6 mm): RRT-Connect goes to the
 /// expert's release, and the fallback says why. One 9 mm towards the wall
 /// is moved back inside it: no fallback.
 #[test]
