@@ -162,6 +162,19 @@ fn a_release_whose_cup_touches_the_wall_of_a_deep_box_is_moved_inside() {
     assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
 }
 
+/// Development cell 2172: a short cup (80 mm) releasing a low product in
+/// a deep box (100 mm), where wrist 3 meets the rim unless the release is
+/// about 13 mm higher; the expert raises its own release twice (20 mm).
+/// The learned release, half a millimetre above the expert's, was capped
+/// at 20 mm above the expert's, so that it could rise only once: two
+/// fallbacks before, none now.
+#[test]
+fn a_release_whose_wrist_meets_the_rim_of_a_deep_box_is_raised_as_far_as_the_experts() {
+    let report = executes_with_the_bundled_model(2172, SuiteKind::Case1N1, "01");
+    assert_eq!(report["complete"], true, "{report}");
+    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+}
+
 /// Scenario `number` of suite `kind` of generated cell `seed`, executed
 /// with the bundled model (exit 0): the JSON report.
 fn executes_with_the_bundled_model(seed: u64, kind: SuiteKind, number: &str) -> serde_json::Value {

@@ -264,12 +264,15 @@ fn with_room(arm: &Arm, start: &Joints, end: Joints) -> Joints {
     out
 }
 
-/// How far above the expert's release (m) a learned release whose motion
-/// collides may be raised: a learned release a little too low (the held
-/// product pressed into the floor) is let go 1 or 2 cm up, as the expert
-/// lets go 5 mm up; one beside a wall is not raised until it is clear of
-/// the wall (measured: released 9 cm up, a product dropped 29 mm off its
-/// slot).
+/// How far above the expert's release, or the learned release when that
+/// is higher, (m) a learned release whose motion collides may be raised: a
+/// learned release a little too low (the held product pressed into the
+/// floor) is let go 1 or 2 cm up, as the expert lets go 5 mm up; one
+/// beside a wall is not raised until it is clear of the wall (measured:
+/// released 9 cm up, a product dropped 29 mm off its slot). A learned
+/// release a little higher than the expert's may rise as many steps as
+/// the expert's (a short cup in a deep box, where wrist 3 meets the rim
+/// unless both are raised twice).
 const COLLIDING_RELEASE_RAISE: f64 = 0.02;
 
 /// How far (m) a colliding release may be moved to keep its product and
@@ -654,9 +657,9 @@ impl<W: World> Learned<'_, W> {
                 let mut rolled = self.rollout(start, goal, tolerance, load, &mut first_action_us);
                 // A release whose motion collides is raised only as far
                 // as one too low needs: up to COLLIDING_RELEASE_RAISE above
-                // the expert's.
+                // the expert's (or itself, when higher).
                 let ceiling = if release_collides(switch, &rolled) {
-                    ceiling.min(plan.expert[k].tip[2] + COLLIDING_RELEASE_RAISE)
+                    ceiling.min(plan.expert[k].tip[2].max(goal[2]) + COLLIDING_RELEASE_RAISE)
                 } else {
                     ceiling
                 };
