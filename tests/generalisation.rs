@@ -162,6 +162,18 @@ fn a_release_whose_cup_touches_the_wall_of_a_deep_box_is_moved_inside() {
     assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
 }
 
+/// Development cell 2002: a 60 mm cube in a box 80 mm wide, where the
+/// padded product has 4 mm to spare. The learned release was inside by
+/// 0.3 mm, but the policy reaches a release within 2 mm: it ended 1.3 mm
+/// beyond and the product touched the wall (a fallback). A colliding
+/// release already inside is now reached within 0.5 mm too: none.
+#[test]
+fn a_release_just_inside_a_tight_box_is_reached_closely() {
+    let report = executes_with_the_bundled_model(2002, SuiteKind::Case1N2, "01");
+    assert_eq!(report["complete"], true, "{report}");
+    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+}
+
 /// Development cell 2172: a short cup (80 mm) releasing a low product in
 /// a deep box (100 mm), where wrist 3 meets the rim unless the release is
 /// about 13 mm higher; the expert raises its own release twice (20 mm).

@@ -388,9 +388,11 @@ impl Inside {
     }
 
     /// `goal` moved into the inside on each axis where everything fits
-    /// (the nearest such point); `None` when that changes nothing.
+    /// (the nearest such point; `goal` itself when it is inside already);
+    /// `None` when nothing fits on either axis.
     fn keep(&self, goal: [f64; 3]) -> Option<[f64; 3]> {
         let mut kept = goal;
+        let mut fits = false;
         for axis in 0..2 {
             let (mut lo, mut hi) = self.product[axis];
             if goal[2] < self.rim {
@@ -399,9 +401,10 @@ impl Inside {
             }
             if lo <= hi {
                 kept[axis] = goal[axis].clamp(lo, hi);
+                fits = true;
             }
         }
-        (kept != goal).then_some(kept)
+        fits.then_some(kept)
     }
 }
 
@@ -680,7 +683,8 @@ impl<W: World> Learned<'_, W> {
                 // A release whose product or cup would touch the box's
                 // wall (a learned sub-goal a few millimetres off in a
                 // tight box): moved just inside the walls, when that is
-                // near.
+                // near, and reached closely (a sub-goal already inside by
+                // less than the usual reach too).
                 if release_collides(switch, &rolled)
                     && !self.station.late()
                     && let Some(kept) = plan.inside.and_then(|i| i.keep(goal))
@@ -1111,7 +1115,7 @@ mod tests {
         let inside = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(0.0))
             .expect("the box exists");
         let at = |y: f64| [-0.2, 0.65 + y, 0.06];
-        assert_eq!(inside.keep(at(0.0015)), None, "already inside");
+        assert_eq!(inside.keep(at(0.0015)), Some(at(0.0015)), "already inside");
         let kept = inside.keep(at(0.004)).expect("moved");
         assert!((kept[1] - 0.652).abs() < 1e-9, "{kept:?}");
         assert_eq!((kept[0], kept[2]), (-0.2, 0.06), "x and z stay");
@@ -1139,7 +1143,9 @@ mod tests {
         let cell = narrow_box();
         let inside = Inside::new(&cell, 0, [0.04, 0.075, 0.05], [0.0, 0.0], &down(0.0))
             .expect("the box exists");
-        assert_eq!(inside.keep([-0.2, 0.653, 0.06]), None);
+        // Along the box's length it fits: only that axis is kept.
+        assert_eq!(inside.keep([-0.2, 0.653, 0.06]), Some([-0.2, 0.653, 0.06]));
+        assert_eq!(inside.keep([-0.4, 0.653, 0.06]).map(|k| k[1]), Some(0.653));
         assert_eq!(
             Inside::new(&cell, 1, [0.04, 0.04, 0.05], [0.0, 0.0], &down(0.0)),
             None
