@@ -174,6 +174,17 @@ fn a_release_just_inside_a_tight_box_is_reached_closely() {
     assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
 }
 
+/// Development cell 2144: a learned release 2.7 mm low and 4 mm towards
+/// the wall of a box 80 mm wide. Raised, it still touched the wall; moved
+/// inside at its own height, the product touched the floor (a fallback).
+/// It is now moved inside at the expert's height (5 mm up): none.
+#[test]
+fn a_low_release_against_a_wall_is_moved_inside_at_the_experts_height() {
+    let report = executes_with_the_bundled_model(2144, SuiteKind::Case1N1, "02");
+    assert_eq!(report["complete"], true, "{report}");
+    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+}
+
 /// Development cell 2172: a short cup (80 mm) releasing a low product in
 /// a deep box (100 mm), where wrist 3 meets the rim unless the release is
 /// about 13 mm higher; the expert raises its own release twice (20 mm).

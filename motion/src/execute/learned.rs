@@ -684,10 +684,14 @@ impl<W: World> Learned<'_, W> {
                 // wall (a learned sub-goal a few millimetres off in a
                 // tight box): moved just inside the walls, when that is
                 // near, and reached closely (a sub-goal already inside by
-                // less than the usual reach too).
+                // less than the usual reach too); no lower than the
+                // expert's, which lets go 5 mm up (a learned release a
+                // little low, held against the floor, was raised, but
+                // moved inside at its own height).
+                let not_low = [goal[0], goal[1], goal[2].max(plan.expert[k].tip[2])];
                 if release_collides(switch, &rolled)
                     && !self.station.late()
-                    && let Some(kept) = plan.inside.and_then(|i| i.keep(goal))
+                    && let Some(kept) = plan.inside.and_then(|i| i.keep(not_low))
                     && (kept[0] - goal[0]).hypot(kept[1] - goal[1]) <= KEEP_INSIDE
                     && let Ok(route) =
                         self.rollout(start, kept, BACK_UP_REACHED, load, &mut first_action_us)
