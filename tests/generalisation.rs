@@ -198,6 +198,18 @@ fn a_release_whose_wrist_meets_the_rim_of_a_deep_box_is_raised_as_far_as_the_exp
     assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
 }
 
+/// Development cell 2255: products behind a robot on a riser, the box in
+/// front. From a release at the far end of the box, the next product was
+/// almost straight behind: the policy turned the base little and folded
+/// the elbow past its limit (a fallback). The steps now go through a via
+/// point half way round: none.
+#[test]
+fn a_product_straight_behind_the_arm_is_reached_by_turning_half_way_first() {
+    let report = executes_with_the_bundled_model(2255, SuiteKind::Case1N, "01");
+    assert_eq!(report["complete"], true, "{report}");
+    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+}
+
 /// Scenario `number` of suite `kind` of generated cell `seed`, executed
 /// with the bundled model (exit 0): the JSON report.
 fn executes_with_the_bundled_model(seed: u64, kind: SuiteKind, number: &str) -> serde_json::Value {

@@ -19,7 +19,7 @@ use super::station::{
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
-use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 use packwright_interface::outcome::{
     Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, SubGoalKind,
     Violation,
@@ -182,6 +182,43 @@ pub fn policy_steps(
         }
         steps.push(q);
     }
+}
+
+/// How far round the base (rad) a goal must be from the cup tip for the
+/// policy's steps that fall short to be tried again through
+/// [`swing_via`]: a third of a turn. Almost behind the arm, turning
+/// either way is as short, the policy turns the base little and folds
+/// the elbow instead (measured on a development cell: the elbow past its
+/// limit, 0.9 m from the goal).
+const WIDE_SWING: f64 = TAU / 3.0;
+
+/// A via point half way round the base from cup tip `from` to `goal`
+/// (world), at their mean distance from the base's axis and the higher
+/// of their heights, turning the way that leaves base joint `q0` nearer
+/// the middle of its range (0) at the end; `None` when `goal` is less
+/// than [`WIDE_SWING`] round from `from`.
+pub fn swing_via(
+    base: &Isometry3<f64>,
+    q0: f64,
+    from: [f64; 3],
+    goal: [f64; 3],
+) -> Option<[f64; 3]> {
+    let local = |p: [f64; 3]| base.inverse_transform_point(&Point3::from(p));
+    let (a, b) = (local(from), local(goal));
+    let turn = record::short_way(b.y.atan2(b.x) - a.y.atan2(a.x));
+    if turn.abs() < WIDE_SWING {
+        return None;
+    }
+    let other = turn - TAU.copysign(turn);
+    let swing = if (q0 + turn).abs() <= (q0 + other).abs() {
+        turn
+    } else {
+        other
+    };
+    let angle = a.y.atan2(a.x) + swing / 2.0;
+    let radius = (a.x.hypot(a.y) + b.x.hypot(b.y)) / 2.0;
+    let via = Point3::new(radius * angle.cos(), radius * angle.sin(), a.z.max(b.z));
+    Some((base * via).coords.into())
 }
 
 /// Via points from `start` across to above `end`'s cup tip (at the
@@ -439,16 +476,17 @@ impl<W: World> Learned<'_, W> {
         first_action_us: &mut Option<f64>,
     ) -> Result<Route, Shortfall> {
         let s = &self.station;
+        let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
         let steps = policy_steps(
-            s.arm,
-            &s.base,
-            s.task.cell.suction,
+            arm,
+            base,
+            suction,
             start,
             goal,
             tolerance,
             &mut |q, delta| {
-                // Only the first call is timed (`get_or_insert` would read
-                // the clock at every step).
+                // Only the first call is timed (`get_or_insert` would read the
+                // clock at every step).
                 let called = first_action_us.is_none().then(Instant::now);
                 let action = self.act(q, delta);
                 if let Some(called) = called {
@@ -456,7 +494,21 @@ impl<W: World> Learned<'_, W> {
                 }
                 action
             },
-        )?;
+        );
+        // A goal far round the base the policy fell short of: through a
+        // via point half way round, the way the base has room.
+        let steps = steps.or_else(|why| {
+            let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
+            let from: [f64; 3] = s.tip(&start);
+            let via = swing_via(base, start[0], from, goal).ok_or(why.clone())?;
+            let mut steps = policy_steps(arm, base, suction, start, via, REACHED_VIA, act)
+                .map_err(|_| why.clone())?;
+            let near = steps.last().copied().unwrap_or(start);
+            let rest =
+                policy_steps(arm, base, suction, near, goal, tolerance, act).map_err(|_| why)?;
+            steps.extend(rest);
+            Ok(steps)
+        })?;
         let Some(last) = steps.last() else {
             return Ok(Route {
                 waypoints: Vec::new(),
@@ -1140,6 +1192,42 @@ mod tests {
         // Above the rim, the cup is not in the box: the product's bound.
         let high = [-0.2, 0.665, 0.09];
         assert!((turned.keep(high).expect("moved")[1] - 0.662).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_goal_behind_the_arm_is_reached_through_a_via_on_the_side_with_room() {
+        // A base on a riser, turned a quarter: the tip along the base's
+        // x is along the world's y.
+        let base = Isometry3::new(Vector3::new(0.2, -0.3, 0.24), Vector3::z() * FRAC_PI_2);
+        let world =
+            |x: f64, y: f64, z: f64| -> [f64; 3] { (base * Point3::new(x, y, z)).coords.into() };
+        let from = world(0.5, 0.0, 0.3);
+        let behind = world(-0.6, 0.05, 0.1);
+        let near = |a: [f64; 3], b: [f64; 3]| (0..3).all(|j| (a[j] - b[j]).abs() < 1e-9);
+        // Behind and a little to the left: with the base turned right
+        // (q0 < 0), the short way, to the left, ends nearer the middle of
+        // the base's range; turned left, the other way round does.
+        let left = swing_via(&base, -0.5, from, behind).expect("behind");
+        let turn = record::short_way(0.05f64.atan2(-0.6));
+        let r = (0.5 + 0.6f64.hypot(0.05)) / 2.0;
+        assert!(
+            near(
+                left,
+                world(r * (turn / 2.0).cos(), r * (turn / 2.0).sin(), 0.3)
+            ),
+            "{left:?}"
+        );
+        let right = swing_via(&base, 0.5, from, behind).expect("behind");
+        let other = turn - TAU;
+        assert!(
+            near(
+                right,
+                world(r * (other / 2.0).cos(), r * (other / 2.0).sin(), 0.3)
+            ),
+            "{right:?}"
+        );
+        // A quarter turn round is not wide.
+        assert_eq!(swing_via(&base, 0.0, from, world(0.0, 0.6, 0.1)), None);
     }
 
     #[test]
