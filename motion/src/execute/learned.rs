@@ -542,7 +542,6 @@ impl<W: World> Learned<'_, W> {
                 // its end, then down the vertical, as the expert's descent
                 // and the back-up from a release go.
                 let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
-                let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
                 if let Some(vias) = descent_vias(arm, base, suction, start, end, tolerance, act)
                     && let Ok(route) = route(vias)
                 {
