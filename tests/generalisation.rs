@@ -137,9 +137,7 @@ fn a_release_handed_to_rrt_connect_goes_down_from_the_experts_above_the_slot() {
 /// way round, with room: no fallback.
 #[test]
 fn a_half_turn_swing_ending_at_the_base_limit_goes_the_other_way_round() {
-    let report = executes_with_the_bundled_model(3081, SuiteKind::Case1N1, "02");
-    assert_eq!(report["complete"], true, "{report}");
-    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+    packs_without_fallback(3081, SuiteKind::Case1N1, "02");
 }
 
 /// Development cell 2005 (`packwright generate --seed 2005`): a learned
@@ -148,18 +146,14 @@ fn a_half_turn_swing_ending_at_the_base_limit_goes_the_other_way_round() {
 /// now moved just inside the walls: no fallback.
 #[test]
 fn a_release_against_the_wall_of_a_narrow_box_is_moved_inside() {
-    let report = executes_with_the_bundled_model(2005, SuiteKind::Case1N1, "01");
-    assert_eq!(report["complete"], true, "{report}");
-    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+    packs_without_fallback(2005, SuiteKind::Case1N1, "01");
 }
 
 /// Development cell 2173: the same with the cup itself against the wall
 /// of a deep box, above a small product (two fallbacks before).
 #[test]
 fn a_release_whose_cup_touches_the_wall_of_a_deep_box_is_moved_inside() {
-    let report = executes_with_the_bundled_model(2173, SuiteKind::Case1N, "01");
-    assert_eq!(report["complete"], true, "{report}");
-    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+    packs_without_fallback(2173, SuiteKind::Case1N, "01");
 }
 
 /// Development cell 2002: a 60 mm cube in a box 80 mm wide, where the
@@ -169,9 +163,7 @@ fn a_release_whose_cup_touches_the_wall_of_a_deep_box_is_moved_inside() {
 /// release already inside is now reached within 0.5 mm too: none.
 #[test]
 fn a_release_just_inside_a_tight_box_is_reached_closely() {
-    let report = executes_with_the_bundled_model(2002, SuiteKind::Case1N2, "01");
-    assert_eq!(report["complete"], true, "{report}");
-    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+    packs_without_fallback(2002, SuiteKind::Case1N2, "01");
 }
 
 /// Development cell 2144: a learned release 2.7 mm low and 4 mm towards
@@ -180,9 +172,7 @@ fn a_release_just_inside_a_tight_box_is_reached_closely() {
 /// It is now moved inside at the expert's height (5 mm up): none.
 #[test]
 fn a_low_release_against_a_wall_is_moved_inside_at_the_experts_height() {
-    let report = executes_with_the_bundled_model(2144, SuiteKind::Case1N1, "02");
-    assert_eq!(report["complete"], true, "{report}");
-    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+    packs_without_fallback(2144, SuiteKind::Case1N1, "02");
 }
 
 /// Development cell 2172: a short cup (80 mm) releasing a low product in
@@ -193,9 +183,7 @@ fn a_low_release_against_a_wall_is_moved_inside_at_the_experts_height() {
 /// fallbacks before, none now.
 #[test]
 fn a_release_whose_wrist_meets_the_rim_of_a_deep_box_is_raised_as_far_as_the_experts() {
-    let report = executes_with_the_bundled_model(2172, SuiteKind::Case1N1, "01");
-    assert_eq!(report["complete"], true, "{report}");
-    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+    packs_without_fallback(2172, SuiteKind::Case1N1, "01");
 }
 
 /// Development cell 2255: products behind a robot on a riser, the box in
@@ -205,7 +193,13 @@ fn a_release_whose_wrist_meets_the_rim_of_a_deep_box_is_raised_as_far_as_the_exp
 /// point half way round: none.
 #[test]
 fn a_product_straight_behind_the_arm_is_reached_by_turning_half_way_first() {
-    let report = executes_with_the_bundled_model(2255, SuiteKind::Case1N, "01");
+    packs_without_fallback(2255, SuiteKind::Case1N, "01");
+}
+
+/// Scenario `number` of suite `kind` of generated cell `seed`, executed
+/// with the bundled model: the package complete, with no fallback.
+fn packs_without_fallback(seed: u64, kind: SuiteKind, number: &str) {
+    let report = executes_with_the_bundled_model(seed, kind, number);
     assert_eq!(report["complete"], true, "{report}");
     assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
 }
