@@ -196,6 +196,15 @@ fn a_product_straight_behind_the_arm_is_reached_by_turning_half_way_first() {
     packs_without_fallback(2255, SuiteKind::Case1N, "01");
 }
 
+/// Development cell 2251: the learned "above the slot" ended with the
+/// base 3 mrad inside its limit, and the release's steps took it 6 mrad
+/// past: brought a whole turn back, the descent spun the arm round into
+/// the box's outside (a fallback). Held at the limit: none.
+#[test]
+fn a_release_a_little_past_the_base_limit_is_held_at_the_limit() {
+    packs_without_fallback(2251, SuiteKind::Case1N1, "01");
+}
+
 /// Scenario `number` of suite `kind` of generated cell `seed`, executed
 /// with the bundled model: the package complete, with no fallback.
 fn packs_without_fallback(seed: u64, kind: SuiteKind, number: &str) {

@@ -268,6 +268,28 @@ pub fn descent_vias(
     Some(vias)
 }
 
+/// How far (rad) past its limit the base or wrist 3 may end a motion that
+/// starts within it and be held at the limit instead: brought a whole turn
+/// back, a release a few milliradians past would spin the arm a full turn
+/// on its way down into the box (measured on a development cell: 6 mrad
+/// past, the cup against the box's outside). Held, the cup tip ends at
+/// most this angle times the reach from where the steps put it.
+const LIMIT_SLACK: f64 = 0.01;
+
+/// `q` with the base and wrist 3 held at their limits where they are at
+/// most [`LIMIT_SLACK`] past them and `start` is within them.
+fn held_at_limits(arm: &Arm, start: &Joints, q: Joints) -> Joints {
+    let mut held = q;
+    for j in [0, q.len() - 1] {
+        let l = &arm.limits[j];
+        let clamped = q[j].clamp(l.lower, l.upper);
+        if l.contains(start[j]) && (q[j] - clamped).abs() <= LIMIT_SLACK {
+            held[j] = clamped;
+        }
+    }
+    held
+}
+
 /// Room (rad) a motion's end leaves to the limits of the base and wrist 3,
 /// the joints that turn freely: the sub-goals after a swing move them a
 /// few degrees further.
@@ -517,7 +539,8 @@ impl<W: World> Learned<'_, W> {
         };
         // The base and wrist 3 may have turned past their limits: the same
         // pose a whole turn back, which the straight motion reaches the
-        // other way round.
+        // other way round; a few milliradians past, held at the limit.
+        let last = &held_at_limits(s.arm, &start, *last);
         let end = s.arm.into_limits(last, &start).ok_or_else(|| {
             let joint = (0..last.len()).find(|&j| !s.arm.limits[j].contains(last[j]));
             Shortfall::Limits {
@@ -1227,6 +1250,26 @@ mod tests {
         );
         // A quarter turn round is not wide.
         assert_eq!(swing_via(&base, 0.0, from, world(0.0, 0.6, 0.1)), None);
+    }
+
+    #[test]
+    fn a_base_a_little_past_its_limit_is_held_there_not_turned_back() {
+        let arm = Arm::ur10();
+        let upper = arm.limits[0].upper;
+        let start = [upper - 0.003, -1.5, 2.0, -2.0, -1.571, 1.5];
+        let mut past = start;
+        past[0] = upper + 0.006;
+        past[5] = arm.limits[5].lower - 0.004;
+        let held = held_at_limits(&arm, &start, past);
+        assert_eq!((held[0], held[5]), (upper, arm.limits[5].lower));
+        assert_eq!(held[1..5], past[1..5], "the other joints stay");
+        // Farther past: left to be brought a whole turn back.
+        let mut far = start;
+        far[0] = upper + 0.05;
+        assert_eq!(held_at_limits(&arm, &start, far), far);
+        // From outside the limits (a step's own turn past them): left.
+        let outside = [upper + 0.002, -1.5, 2.0, -2.0, -1.571, 1.5];
+        assert_eq!(held_at_limits(&arm, &outside, past)[0], past[0]);
     }
 
     #[test]
