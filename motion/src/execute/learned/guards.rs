@@ -1,0 +1,496 @@
+//! Geometric guards of the learned loop: bounded corrections tried only
+//! after a learned motion failed (or, for the limits, would turn a joint
+//! a whole turn), so that nothing that packs without them changes.
+//!
+//! - [`swing_via`]: a goal far round the base, through a via half way;
+//! - [`descent_vias`]: down the vertical over a release or a top face,
+//!   where the straight joint motion bows into a wall;
+//! - [`held_at_limits`] and [`with_room`]: the base and wrist 3 near their
+//!   limits held there, or turned the other way round;
+//! - [`Inside`]: a colliding release moved just inside the box's walls;
+//!   [`COLLIDING_RELEASE_RAISE`] bounds how far one is raised.
+//!
+//! Invariants: each guard is bounded (a 2 cm raise, a 6 mm move, a via
+//! only for swings over 120 degrees, 10 mrad at a limit) and returns
+//! points or joints for the loop to check: none of them sends anything
+//! or skips a collision check.
+
+use super::steps::{BACK_UP_REACHED, policy_steps};
+use crate::execute::station::Route;
+use crate::expert::Suction;
+use nalgebra::{Isometry3, Point3, UnitQuaternion};
+use packwright_interface::outcome::Shortfall;
+use packwright_interface::record;
+use packwright_interface::scene::CellScene;
+use packwright_kinematics::body::{BOX_WALL, CUP_RADIUS, HELD_PADDING, PADDING};
+use packwright_kinematics::{Arm, Joints};
+use std::f64::consts::{FRAC_PI_2, TAU};
+
+/// Segments of a learned descent down the vertical over its end, when the
+/// straight joint motion would touch a wall ([`descent_vias`]).
+const DESCENT_VIAS: usize = 5;
+
+/// How far round the base (rad) a goal must be from the cup tip for the
+/// policy's steps that fall short to be tried again through
+/// [`swing_via`]: a third of a turn. Almost behind the arm, turning
+/// either way is as short, the policy turns the base little and folds
+/// the elbow instead (measured on a development cell: the elbow past its
+/// limit, 0.9 m from the goal).
+const WIDE_SWING: f64 = TAU / 3.0;
+
+/// A via point half way round the base from cup tip `from` to `goal`
+/// (world), at their mean distance from the base's axis and the higher
+/// of their heights, turning the way that leaves base joint `q0` nearer
+/// the middle of its range (0) at the end; `None` when `goal` is less
+/// than [`WIDE_SWING`] round from `from`.
+pub fn swing_via(
+    base: &Isometry3<f64>,
+    q0: f64,
+    from: [f64; 3],
+    goal: [f64; 3],
+) -> Option<[f64; 3]> {
+    let local = |p: [f64; 3]| base.inverse_transform_point(&Point3::from(p));
+    let (a, b) = (local(from), local(goal));
+    let turn = record::short_way(b.y.atan2(b.x) - a.y.atan2(a.x));
+    if turn.abs() < WIDE_SWING {
+        return None;
+    }
+    let other = turn - TAU.copysign(turn);
+    let swing = if (q0 + turn).abs() <= (q0 + other).abs() {
+        turn
+    } else {
+        other
+    };
+    let angle = a.y.atan2(a.x) + swing / 2.0;
+    let radius = (a.x.hypot(a.y) + b.x.hypot(b.y)) / 2.0;
+    let via = Point3::new(radius * angle.cos(), radius * angle.sin(), a.z.max(b.z));
+    Some((base * via).coords.into())
+}
+
+/// Via points from `start` across to above `end`'s cup tip (at the
+/// start's height; none when it is already within `tolerance`), then down
+/// the vertical line to it, each reached by the policy's steps
+/// ([`policy_steps`]) within `tolerance`, then `end`: at most
+/// [`DESCENT_VIAS`] segments. A straight joint motion down into a slot
+/// bows sideways (measured: 5-7 mm at the middle of a 14 cm descent),
+/// and a learned "above the slot" is a few millimetres beside the learned
+/// release, so that even the tip's straight line slants: either way a
+/// held product enters a narrow box beside its slot and touches the
+/// wall. Going down vertically over the learned release, it enters where
+/// it is let go. `None` when the motion is not a descent (it goes
+/// sideways at least half as far as it goes down), or the steps fall
+/// short or leave the limits.
+pub fn descent_vias(
+    arm: &Arm,
+    base: &Isometry3<f64>,
+    suction: f64,
+    start: Joints,
+    end: Joints,
+    tolerance: f64,
+    action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
+) -> Option<Vec<Joints>> {
+    let tip = |q: &Joints| -> [f64; 3] { arm.tool_tip(base, q, suction).coords.into() };
+    let (a, b) = (tip(&start), tip(&end));
+    let drop = a[2] - b[2];
+    if drop <= 0.0 || 2.0 * (b[0] - a[0]).hypot(b[1] - a[1]) >= drop {
+        return None;
+    }
+    let mut near = start;
+    let mut vias = Vec::with_capacity(DESCENT_VIAS);
+    for i in 1..DESCENT_VIAS {
+        let f = (i - 1) as f64 / (DESCENT_VIAS - 1) as f64;
+        let via = [b[0], b[1], a[2] + (b[2] - a[2]) * f];
+        if i == 1 && (via[0] - a[0]).hypot(via[1] - a[1]) <= tolerance {
+            continue;
+        }
+        let steps = policy_steps(arm, base, suction, near, via, tolerance, action).ok()?;
+        near = steps.last().copied().unwrap_or(near);
+        if !arm.within_limits(&near) {
+            return None;
+        }
+        vias.push(near);
+    }
+    vias.push(end);
+    Some(vias)
+}
+
+/// How far (rad) past its limit the base or wrist 3 may end a motion that
+/// starts within it and be held at the limit instead: brought a whole turn
+/// back, a release a few milliradians past would spin the arm a full turn
+/// on its way down into the box (measured on a development cell: 6 mrad
+/// past, the cup against the box's outside). Held, the cup tip ends at
+/// most this angle times the reach from where the steps put it.
+const LIMIT_SLACK: f64 = 0.01;
+
+/// `q` with the base and wrist 3 held at their limits where they are at
+/// most [`LIMIT_SLACK`] past them and `start` is within them.
+pub(super) fn held_at_limits(arm: &Arm, start: &Joints, q: Joints) -> Joints {
+    let mut held = q;
+    for j in [0, q.len() - 1] {
+        let l = &arm.limits[j];
+        let clamped = q[j].clamp(l.lower, l.upper);
+        if l.contains(start[j]) && (q[j] - clamped).abs() <= LIMIT_SLACK {
+            held[j] = clamped;
+        }
+    }
+    held
+}
+
+/// Room (rad) a motion's end leaves to the limits of the base and wrist 3,
+/// the joints that turn freely: the sub-goals after a swing move them a
+/// few degrees further.
+const TURN_ROOM: f64 = 0.1;
+
+/// `end` with the base or wrist 3 a whole turn the other way where it ends
+/// within [`TURN_ROOM`] of its limit, when the other turn has that room
+/// and is at most a quarter turn farther from `start`: a swing of about
+/// half a turn (either way round is as short) that ends at the base's
+/// limit leaves the descent onto the product a few milliradians on only a
+/// whole turn back, and that swing sweeps the arm through the cell
+/// (probe cells 3063 and 3081: the cup into the box).
+pub(super) fn with_room(arm: &Arm, start: &Joints, end: Joints) -> Joints {
+    let mut out = end;
+    for j in [0, end.len() - 1] {
+        let l = &arm.limits[j];
+        let room = |v: f64| (v - l.lower).min(l.upper - v);
+        if room(end[j]) >= TURN_ROOM {
+            continue;
+        }
+        let other = if end[j] - l.lower < l.upper - end[j] {
+            end[j] + TAU
+        } else {
+            end[j] - TAU
+        };
+        let farther = (other - start[j]).abs() - (end[j] - start[j]).abs();
+        if room(other) >= TURN_ROOM && farther <= FRAC_PI_2 {
+            out[j] = other;
+        }
+    }
+    out
+}
+
+/// How far above the expert's release, or the learned release when that
+/// is higher, (m) a learned release whose motion collides may be raised: a
+/// learned release a little too low (the held product pressed into the
+/// floor) is let go 1 or 2 cm up, as the expert lets go 5 mm up; one
+/// beside a wall is not raised until it is clear of the wall (measured:
+/// released 9 cm up, a product dropped 29 mm off its slot). A learned
+/// release a little higher than the expert's may rise as many steps as
+/// the expert's (a short cup in a deep box, where wrist 3 meets the rim
+/// unless both are raised twice).
+pub(super) const COLLIDING_RELEASE_RAISE: f64 = 0.02;
+
+/// How far (m) a colliding release may be moved to keep its product and
+/// the cup inside the box's walls ([`Inside::keep`]; the policy then
+/// reaches it within [`BACK_UP_REACHED`]): about twice the
+/// sub-goal planner's error at a release on cells it was not taught, well
+/// within [`SUCCESS_RADIUS`](crate::execute::station::SUCCESS_RADIUS).
+pub(super) const KEEP_INSIDE: f64 = 0.006;
+
+/// How far (m) a kept release ([`Inside`]) stays inside the padded
+/// walls: it is reached within [`BACK_UP_REACHED`], and as far again is
+/// left for rounding and the flange's small tilt.
+const KEPT_MARGIN: f64 = 2.0 * BACK_UP_REACHED;
+
+/// Whether `rolled` is a release (`switch`) whose motion would collide.
+pub(super) fn release_collides(switch: Suction, rolled: &Result<Route, Shortfall>) -> bool {
+    switch == Suction::Off && matches!(rolled, Err(Shortfall::Collides { .. }))
+}
+
+/// The cup-tip positions (x and y, m) from which a held product, let go,
+/// stands clear of its box's inner walls by its padding and
+/// [`KEPT_MARGIN`], with the cup clear of them too when the tip is
+/// below the rim: the box's inside shrunk by the product's half-extents in
+/// the world (moved by where the product hangs from the cup) and by the
+/// cup's padded radius. An axis where they do not fit is left as it is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Inside {
+    /// For the product: lowest and highest x, then y.
+    product: [(f64, f64); 2],
+    /// For the cup.
+    cup: [(f64, f64); 2],
+    /// The box's rim height: the cup goes into the box below it.
+    rim: f64,
+}
+
+impl Inside {
+    /// For a product of `size` hanging `grip` (world x, y: its centre
+    /// minus the cup tip) from a flange turned by `flange`, let go in
+    /// `cell`'s box `b`.
+    pub(super) fn new(
+        cell: &CellScene,
+        b: usize,
+        size: [f64; 3],
+        grip: [f64; 2],
+        flange: &UnitQuaternion<f64>,
+    ) -> Option<Inside> {
+        let held = cell.boxes.get(b)?;
+        let m = flange.to_rotation_matrix().into_inner();
+        let half = [size[0] / 2.0, size[1] / 2.0, size[2] / 2.0];
+        let extent = |row: usize| (0..3).map(|j| m[(row, j)].abs() * half[j]).sum::<f64>();
+        // The inside's bounds on `axis` shrunk by `by`, for a tip `shift`
+        // from the body kept inside.
+        let bound = |axis: usize, by: f64, shift: f64| {
+            let c = held.centre[axis];
+            let w = held.size[axis] / 2.0 - BOX_WALL - by - KEPT_MARGIN;
+            (c - w - shift, c + w - shift)
+        };
+        Some(Inside {
+            product: [0, 1].map(|a| bound(a, extent(a) + HELD_PADDING, grip[a])),
+            cup: [0, 1].map(|a| bound(a, CUP_RADIUS + PADDING, 0.0)),
+            rim: held.size[2],
+        })
+    }
+
+    /// `goal` moved into the inside on each axis where everything fits
+    /// (the nearest such point; `goal` itself when it is inside already);
+    /// `None` when nothing fits on either axis.
+    pub(super) fn keep(&self, goal: [f64; 3]) -> Option<[f64; 3]> {
+        let mut kept = goal;
+        let mut fits = false;
+        for axis in 0..2 {
+            let (mut lo, mut hi) = self.product[axis];
+            if goal[2] < self.rim {
+                lo = lo.max(self.cup[axis].0);
+                hi = hi.min(self.cup[axis].1);
+            }
+            if lo <= hi {
+                kept[axis] = goal[axis].clamp(lo, hi);
+                fits = true;
+            }
+        }
+        fits.then_some(kept)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::execute::REACHED;
+    use nalgebra::Point3;
+    use nalgebra::Vector3;
+    use packwright_interface::scene::BoxSpec;
+    /// A cell with one box, 350 mm wide and 80 mm deep, 80 mm high,
+    /// centred at (-0.2, 0.65): 36 mm from its centre line to the inside
+    /// of its long walls.
+    fn narrow_box() -> CellScene {
+        CellScene {
+            name: "narrow".into(),
+            base: [0.0, 0.0, 0.0],
+            suction: 0.085,
+            lift: 0.1,
+            speed: 1.0,
+            grip_settle: 0.1,
+            release_settle: 0.5,
+            descent: 1.0,
+            pending: ([0.0, 0.0], [0.1, 0.1]),
+            boxes: vec![BoxSpec {
+                name: "carton".into(),
+                centre: [-0.2, 0.65],
+                size: [0.35, 0.08, 0.08],
+            }],
+            slots: Vec::new(),
+        }
+    }
+
+    /// The cup pointing down, turned by `yaw`.
+    fn down(yaw: f64) -> UnitQuaternion<f64> {
+        UnitQuaternion::from_euler_angles(0.0, 0.0, yaw)
+            * UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0)
+    }
+
+    #[test]
+    fn a_release_against_a_wall_is_kept_inside_the_box() {
+        let cell = narrow_box();
+        // A 60 mm deep product: 36 - 30 - 3 mm padding - 1 mm margin
+        // leaves 2 mm either way of the centre line.
+        let inside = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(0.0))
+            .expect("the box exists");
+        let at = |y: f64| [-0.2, 0.65 + y, 0.06];
+        assert_eq!(inside.keep(at(0.0015)), Some(at(0.0015)), "already inside");
+        let kept = inside.keep(at(0.004)).expect("moved");
+        assert!((kept[1] - 0.652).abs() < 1e-9, "{kept:?}");
+        assert_eq!((kept[0], kept[2]), (-0.2, 0.06), "x and z stay");
+        let kept = inside.keep(at(-0.004)).expect("moved");
+        assert!((kept[1] - 0.648).abs() < 1e-9, "{kept:?}");
+        // Hanging 2 mm off the cup towards +y, the cup lets go 2 mm further
+        // towards -y.
+        let off = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.002], &down(0.0))
+            .expect("the box exists");
+        let kept = off.keep(at(0.001)).expect("moved");
+        assert!((kept[1] - 0.65).abs() < 1e-9, "{kept:?}");
+        // Turned a quarter, the product's 60 mm lie along x: in y it is
+        // 40 mm, and the cup (20 mm and 10 mm padding) is the bound.
+        let turned = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(FRAC_PI_2))
+            .expect("the box exists");
+        let kept = turned.keep(at(0.007)).expect("moved");
+        assert!((kept[1] - 0.655).abs() < 1e-9, "{kept:?}");
+        // Above the rim, the cup is not in the box: the product's bound.
+        let high = [-0.2, 0.665, 0.09];
+        assert!((turned.keep(high).expect("moved")[1] - 0.662).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_goal_behind_the_arm_is_reached_through_a_via_on_the_side_with_room() {
+        // A base on a riser, turned a quarter: the tip along the base's
+        // x is along the world's y.
+        let base = Isometry3::new(Vector3::new(0.2, -0.3, 0.24), Vector3::z() * FRAC_PI_2);
+        let world =
+            |x: f64, y: f64, z: f64| -> [f64; 3] { (base * Point3::new(x, y, z)).coords.into() };
+        let from = world(0.5, 0.0, 0.3);
+        let behind = world(-0.6, 0.05, 0.1);
+        let near = |a: [f64; 3], b: [f64; 3]| (0..3).all(|j| (a[j] - b[j]).abs() < 1e-9);
+        // Behind and a little to the left: with the base turned right
+        // (q0 < 0), the short way, to the left, ends nearer the middle of
+        // the base's range; turned left, the other way round does.
+        let left = swing_via(&base, -0.5, from, behind).expect("behind");
+        let turn = record::short_way(0.05f64.atan2(-0.6));
+        let r = (0.5 + 0.6f64.hypot(0.05)) / 2.0;
+        assert!(
+            near(
+                left,
+                world(r * (turn / 2.0).cos(), r * (turn / 2.0).sin(), 0.3)
+            ),
+            "{left:?}"
+        );
+        let right = swing_via(&base, 0.5, from, behind).expect("behind");
+        let other = turn - TAU;
+        assert!(
+            near(
+                right,
+                world(r * (other / 2.0).cos(), r * (other / 2.0).sin(), 0.3)
+            ),
+            "{right:?}"
+        );
+        // A quarter turn round is not wide.
+        assert_eq!(swing_via(&base, 0.0, from, world(0.0, 0.6, 0.1)), None);
+    }
+
+    #[test]
+    fn a_base_a_little_past_its_limit_is_held_there_not_turned_back() {
+        let arm = Arm::ur10();
+        let upper = arm.limits[0].upper;
+        let start = [upper - 0.003, -1.5, 2.0, -2.0, -1.571, 1.5];
+        let mut past = start;
+        past[0] = upper + 0.006;
+        past[5] = arm.limits[5].lower - 0.004;
+        let held = held_at_limits(&arm, &start, past);
+        assert_eq!((held[0], held[5]), (upper, arm.limits[5].lower));
+        assert_eq!(held[1..5], past[1..5], "the other joints stay");
+        // Farther past: left to be brought a whole turn back.
+        let mut far = start;
+        far[0] = upper + 0.05;
+        assert_eq!(held_at_limits(&arm, &start, far), far);
+        // From outside the limits (a step's own turn past them): left.
+        let outside = [upper + 0.002, -1.5, 2.0, -2.0, -1.571, 1.5];
+        assert_eq!(held_at_limits(&arm, &outside, past)[0], past[0]);
+    }
+
+    #[test]
+    fn a_product_wider_than_the_box_is_not_moved() {
+        let cell = narrow_box();
+        let inside = Inside::new(&cell, 0, [0.04, 0.075, 0.05], [0.0, 0.0], &down(0.0))
+            .expect("the box exists");
+        // Along the box's length it fits: only that axis is kept.
+        assert_eq!(inside.keep([-0.2, 0.653, 0.06]), Some([-0.2, 0.653, 0.06]));
+        assert_eq!(inside.keep([-0.4, 0.653, 0.06]).map(|k| k[1]), Some(0.653));
+        assert_eq!(
+            Inside::new(&cell, 1, [0.04, 0.04, 0.05], [0.0, 0.0], &down(0.0)),
+            None
+        );
+    }
+
+    /// Down into a slot, the straight joint motion's tip leaves the
+    /// vertical line by millimetres; the descent's via points go across to
+    /// it at the start's height (when the start is beside it) and keep to
+    /// it on the way down, each within the tolerance, and end where the
+    /// motion ends. A motion mostly sideways is no descent.
+    #[test]
+    fn a_descent_goes_down_the_vertical_over_the_release_where_the_joint_motion_bows() {
+        let arm = Arm::ur10();
+        let base = Isometry3::identity();
+        let suction = 0.1;
+        let (x, y, yaw) = (0.55, 0.25, 0.3);
+        let tip = |q: &Joints| -> [f64; 3] { arm.tool_tip(&base, q, suction).coords.into() };
+        let at = |p: [f64; 3], near: &Joints| {
+            arm.tool_down_ik(&base, Point3::from(p), yaw, suction, near)
+        };
+        let home = [0.0, -1.5, 1.5, -1.6, -1.6, 0.0];
+        let end = at([x, y, 0.11], &home).expect("reachable");
+        // The expert's step towards the joints of the tip it is sent to.
+        let mut act = |q: &Joints, delta: [f64; 3]| {
+            let t = tip(q);
+            let goal = at(std::array::from_fn(|j| t[j] + delta[j]), q).unwrap_or(*q);
+            record::action(q, &goal).map(|v| v as f32)
+        };
+        let off_line = |q: &Joints| {
+            let t = tip(q);
+            (t[0] - x).hypot(t[1] - y)
+        };
+        let tolerance = REACHED;
+        // Straight above the release, and 6 mm beside it (as a learned
+        // "above the slot" may be): the vias go across first, then down.
+        for (beside, across) in [(0.0, false), (0.006, true)] {
+            let start = at([x + beside, y, 0.25], &end).expect("reachable");
+            let middle: Joints = std::array::from_fn(|j| (start[j] + end[j]) / 2.0);
+            assert!(off_line(&middle) > 0.003, "bows {} m", off_line(&middle));
+            let vias = descent_vias(&arm, &base, suction, start, end, tolerance, &mut act)
+                .expect("a descent");
+            assert_eq!(vias.len(), DESCENT_VIAS - usize::from(!across));
+            assert_eq!(vias.last(), Some(&end));
+            let down = &vias[usize::from(across)..];
+            if across {
+                assert!(off_line(&vias[0]) <= tolerance, "{:?}", tip(&vias[0]));
+                assert!((tip(&vias[0])[2] - 0.25).abs() <= tolerance);
+            }
+            for (i, q) in down.iter().enumerate() {
+                let z = 0.25 - 0.14 * (i + 1) as f64 / (DESCENT_VIAS - 1) as f64;
+                assert!(off_line(q) <= tolerance, "via {i} {} m off", off_line(q));
+                assert!(
+                    (tip(q)[2] - z).abs() <= tolerance,
+                    "via {i} at {:?}",
+                    tip(q)
+                );
+            }
+        }
+        let start = at([x, y, 0.25], &end).expect("reachable");
+        let aside = at([x, y + 0.2, 0.11], &start).expect("reachable");
+        assert_eq!(
+            descent_vias(&arm, &base, suction, start, aside, tolerance, &mut act),
+            None
+        );
+    }
+
+    /// A half-turn swing that ends at the base's limit ends a whole turn
+    /// the other way round instead; one ending at the limit a quarter turn
+    /// on, or with room, or a short step past where the other turn is far,
+    /// is left alone.
+    #[test]
+    fn a_swing_ending_at_the_base_limit_goes_the_other_way_round() {
+        let arm = Arm::ur10();
+        let q = |base: f64, wrist3: f64| [base, -1.2, 2.4, -2.8, -FRAC_PI_2, wrist3];
+        let limit = arm.limits[0].lower;
+        // About half a turn, to within 4 mrad of the limit (probe cell 3081).
+        let start = q(-3.315, -1.744);
+        let end = q(limit + 0.004, -4.708);
+        let turned = with_room(&arm, &start, end);
+        assert!((turned[0] - (limit + 0.004 + TAU)).abs() < 1e-12);
+        assert_eq!(turned[1..], end[1..]);
+        // A quarter turn to the limit: the other way is three quarters.
+        let start = q(limit + FRAC_PI_2, 0.0);
+        assert_eq!(with_room(&arm, &start, end), end);
+        // With room: nothing to do.
+        let roomy = q(limit + 0.2, 0.0);
+        assert_eq!(with_room(&arm, &start, roomy), roomy);
+        // A short step along the limit (a descent after such a swing):
+        // the other turn is a whole turn farther.
+        let start = q(limit + 0.004, 0.0);
+        let step = q(limit + 0.002, 0.0);
+        assert_eq!(with_room(&arm, &start, step), step);
+        // Wrist 3 as well.
+        let start = q(0.0, 3.2);
+        let end = q(0.0, arm.limits[5].upper - 0.01);
+        let turned = with_room(&arm, &start, end);
+        assert!(turned[5] < 0.0, "{turned:?}");
+    }
+}
