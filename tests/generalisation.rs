@@ -205,6 +205,17 @@ fn a_release_a_little_past_the_base_limit_is_held_at_the_limit() {
     packs_without_fallback(2251, SuiteKind::Case1N1, "01");
 }
 
+/// Development cell 2382: a 30 mm product let go in a box 80 mm wide and
+/// 90 mm deep with an 80 mm cup. The learned release, 1.3 mm outside the
+/// band where the cup clears the walls, had wrist 3 against the rim;
+/// raised, the cup met the wall; moved inside the band, wrist 3 still met
+/// the rim at the band's edge (a fallback). The kept release is now
+/// raised as the learned one is: none.
+#[test]
+fn a_release_kept_inside_a_narrow_deep_box_is_raised_clear_of_the_rim() {
+    packs_without_fallback(2382, SuiteKind::Case1N1, "03");
+}
+
 /// Scenario `number` of suite `kind` of generated cell `seed`, executed
 /// with the bundled model: the package complete, with no fallback.
 fn packs_without_fallback(seed: u64, kind: SuiteKind, number: &str) {

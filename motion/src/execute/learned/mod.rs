@@ -206,6 +206,28 @@ impl<W: World> Learned<'_, W> {
         }
     }
 
+    /// The policy's motion to `goal` raised [`RAISE_STEP`] at a time (at
+    /// most [`MAX_RAISES`] times, no higher than `ceiling`, while the
+    /// sub-goal's budget lasts): the first that [`Learned::rollout`]
+    /// reaches and finds free.
+    fn raised(
+        &self,
+        start: Joints,
+        goal: [f64; 3],
+        tolerance: f64,
+        load: Load,
+        ceiling: f64,
+        first_action_us: &mut Option<f64>,
+    ) -> Option<Route> {
+        (1..=MAX_RAISES)
+            .map(|i| [goal[0], goal[1], goal[2] + RAISE_STEP * f64::from(i)])
+            .take_while(|higher| higher[2] <= ceiling && !self.station.late())
+            .find_map(|higher| {
+                self.rollout(start, higher, tolerance, load, first_action_us)
+                    .ok()
+            })
+    }
+
     /// The rest of a stage's sub-goal `k` (from 0) by RRT-Connect: to
     /// the learned `goal` (raised up to `ceiling` if it is a release), else,
     /// when no free motion reaches it or there is none, to the expert's
@@ -365,19 +387,11 @@ impl<W: World> Learned<'_, W> {
                 } else {
                     ceiling
                 };
-                let mut raised = 1;
-                while rolled.is_err()
-                    && raised <= MAX_RAISES
-                    && !self.station.late()
-                    && goal[2] + RAISE_STEP * f64::from(raised) <= ceiling
+                if rolled.is_err()
+                    && let Some(route) =
+                        self.raised(start, goal, tolerance, load, ceiling, &mut first_action_us)
                 {
-                    let higher = [goal[0], goal[1], goal[2] + RAISE_STEP * f64::from(raised)];
-                    if let Ok(samples) =
-                        self.rollout(start, higher, tolerance, load, &mut first_action_us)
-                    {
-                        rolled = Ok(samples);
-                    }
-                    raised += 1;
+                    rolled = Ok(route);
                 }
                 // A release whose product or cup would touch the box's
                 // wall (a learned sub-goal a few millimetres off in a
@@ -386,14 +400,28 @@ impl<W: World> Learned<'_, W> {
                 // less than the usual reach too); no lower than the
                 // expert's, which lets go 5 mm up (a learned release a
                 // little low, held against the floor, was raised, but
-                // moved inside at its own height).
+                // moved inside at its own height). Where something above
+                // the cup still meets the rim there (wrist 3 over a deep
+                // box: inside the cup's bounds, but at their edge), the
+                // kept release is raised as the learned one is.
                 let not_low = [goal[0], goal[1], goal[2].max(plan.expert[k].tip[2])];
                 if release_collides(switch, &rolled)
                     && !self.station.late()
                     && let Some(kept) = plan.inside.and_then(|i| i.keep(not_low))
                     && (kept[0] - goal[0]).hypot(kept[1] - goal[1]) <= KEEP_INSIDE
-                    && let Ok(route) =
-                        self.rollout(start, kept, BACK_UP_REACHED, load, &mut first_action_us)
+                    && let Some(route) = self
+                        .rollout(start, kept, BACK_UP_REACHED, load, &mut first_action_us)
+                        .ok()
+                        .or_else(|| {
+                            self.raised(
+                                start,
+                                kept,
+                                BACK_UP_REACHED,
+                                load,
+                                ceiling,
+                                &mut first_action_us,
+                            )
+                        })
                 {
                     goals[k] = kept;
                     rolled = Ok(route);
