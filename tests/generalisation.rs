@@ -216,6 +216,17 @@ fn a_release_kept_inside_a_narrow_deep_box_is_raised_clear_of_the_rim() {
     packs_without_fallback(2382, SuiteKind::Case1N1, "03");
 }
 
+/// Development cell 2612: a 30 mm cube let go in a box 70 mm wide with
+/// an 80 mm cup, where the cup's padded radius leaves it 1 mm either side
+/// of the centre line. The learned release, raised, left the cup 0.05 mm
+/// inside that band; the way back up, through five via points, bowed
+/// into the wall and the package stopped. Through twenty where five
+/// touch: packed.
+#[test]
+fn the_way_up_from_a_release_near_a_narrow_boxs_wall_takes_finer_via_points() {
+    packs_without_fallback(2612, SuiteKind::Case1N, "05");
+}
+
 /// Scenario `number` of suite `kind` of generated cell `seed`, executed
 /// with the bundled model: the package complete, with no fallback.
 fn packs_without_fallback(seed: u64, kind: SuiteKind, number: &str) {
