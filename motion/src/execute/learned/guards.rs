@@ -23,7 +23,7 @@ use packwright_interface::outcome::Shortfall;
 use packwright_interface::record;
 use packwright_interface::scene::CellScene;
 use packwright_kinematics::body::{BOX_WALL, CUP_RADIUS, HELD_PADDING, PADDING};
-use packwright_kinematics::{Arm, Joints};
+use packwright_kinematics::{Arm, DOF, Joints};
 use std::f64::consts::{FRAC_PI_2, TAU};
 
 /// Segments of a learned descent down the vertical over its end, when the
@@ -114,6 +114,11 @@ pub fn descent_vias(
     Some(vias)
 }
 
+/// The joints that turn freely, the base and wrist 3: the policy's steps
+/// turn them past their limits (`q` and `q` ± 2π are the same pose), and
+/// the guards below bring a motion's end back.
+const TURNING: [usize; 2] = [0, DOF - 1];
+
 /// How far (rad) past its limit the base or wrist 3 may end a motion that
 /// starts within it and be held at the limit instead: brought a whole turn
 /// back, a release a few milliradians past would spin the arm a full turn
@@ -126,7 +131,7 @@ const LIMIT_SLACK: f64 = 0.01;
 /// most [`LIMIT_SLACK`] past them and `start` is within them.
 pub(super) fn held_at_limits(arm: &Arm, start: &Joints, q: Joints) -> Joints {
     let mut held = q;
-    for j in [0, q.len() - 1] {
+    for j in TURNING {
         let l = &arm.limits[j];
         let clamped = q[j].clamp(l.lower, l.upper);
         if l.contains(start[j]) && (q[j] - clamped).abs() <= LIMIT_SLACK {
@@ -150,7 +155,7 @@ const TURN_ROOM: f64 = 0.1;
 /// (probe cells 3063 and 3081: the cup into the box).
 pub(super) fn with_room(arm: &Arm, start: &Joints, end: Joints) -> Joints {
     let mut out = end;
-    for j in [0, end.len() - 1] {
+    for j in TURNING {
         let l = &arm.limits[j];
         let room = |v: f64| (v - l.lower).min(l.upper - v);
         if room(end[j]) >= TURN_ROOM {
