@@ -67,7 +67,7 @@ impl RobotAddress {
                 None => (authority.to_string(), RTDE_PORT),
             }
         };
-        if host.is_empty() || host.contains(['/', '@', ' ']) {
+        if host.is_empty() || host.contains(['/', '@', ' ', '[', ']']) {
             return Err(bad("expected a host name or address"));
         }
         let mut a = RobotAddress {
@@ -146,6 +146,8 @@ mod tests {
             "ur10://host:x",
             "ur10://host?foo=1",
             "ur10://[::1",
+            "ur10://[[]",
+            "ur10://a]:5",
         ] {
             assert!(RobotAddress::parse(bad).is_err(), "{bad}");
         }
