@@ -12,8 +12,9 @@
 //!   cell, demonstrated or not;
 //! - a **sub-goal** is in cylindrical coordinates about the robot base's
 //!   vertical axis, relative to the feature (the product, or the slot at
-//!   its box's rim), with the turn from the cup tip to the feature as an
-//!   input: the expert's
+//!   its box's rim), its height over a surface (the product's top face,
+//!   the rim, the box's floor), with the turn from the cup tip to the
+//!   feature as an input and no height by itself: the expert's
 //!   approach point, half-way round between the pick and place azimuths,
 //!   is then one smooth function of the inputs whichever side the box is
 //!   on (in Cartesian coordinates the two ways round a box behind the
@@ -62,13 +63,19 @@ pub fn chain_slope(raw: f32) -> f32 {
 /// their length (decimetres).
 pub const SLOT_FEATURES: usize = 3;
 /// The sub-goal planner's inputs ([`subgoal_input`]).
-pub const SUBGOAL_INPUTS: usize = 10;
+pub const SUBGOAL_INPUTS: usize = 8;
 /// The dynamics policy's inputs ([`action_input`]).
 pub const ACTION_INPUTS: usize = 5;
 /// Metres per radian of sub-goal azimuth in the planner's outputs: a
 /// typical reach, so that an azimuth error weighs like the distance it
 /// moves the cup.
 pub const ARC_SCALE: f32 = 0.7;
+/// Scale of the release's height in the planner's outputs: the held
+/// product is let go 5 mm over the floor with 3 mm of padding, so a
+/// release 2 mm low touches it (and is raised and planned again), and
+/// the release's height must be fitted to the millimetre. At the scale
+/// of the other outputs the planner left it 1.4 mm low.
+pub const RELEASE_HEIGHT_SCALE: f32 = 10.0;
 
 /// One reasoner decision: the graph at the start of a stage and what the
 /// demonstrator did.
@@ -171,20 +178,66 @@ fn polar(p: [f32; 3], base: [f32; 3]) -> (f32, f32) {
     (dx.hypot(dy), dy.atan2(dx))
 }
 
-/// The sub-goal planner's input row: the cup tip's radius and height
-/// relative to the feature's, the feature's height over the table
-/// (decimetres), the turn from the tip's azimuth to the feature's (the
-/// shorter way), the product's height (decimetres), the stage and the
-/// sub-goal index one-hot. The two heights vary by a few centimetres from
-/// cell to cell and the release depends on both (the box's depth below
-/// its rim, the product's height above its floor): in metres the planner
-/// fitted the rim's part only three quarters of the way (releases 5 mm
-/// low in boxes 60 mm deep, 5-7 mm high in boxes 100 mm deep, where the
-/// expert lets go 5 mm above the floor). Nothing says where the feature
-/// is around or away from the base: the expert's sub-goals do not depend
-/// on it, and a model that could not see it cannot learn to depend on it
-/// (a slot at a radius no demonstration used is planned for like the
-/// others).
+/// How far the cup tip is above what the sub-goal's heights measure: the
+/// held product's bottom when placing (the product's height), the tip
+/// itself when picking.
+fn carried(q: &SubGoalQuery) -> f32 {
+    match q.stage {
+        Stage::Picking => 0.0,
+        Stage::Placing => q.height,
+    }
+}
+
+/// The height of the surface a stage's heights are measured from: the
+/// handled product's top face (picking; the feature is its centre), the
+/// box's rim (placing).
+fn stage_surface(q: &SubGoalQuery) -> f32 {
+    match q.stage {
+        Stage::Picking => q.feature[2] + q.height / 2.0,
+        Stage::Placing => q.feature[2],
+    }
+}
+
+/// The height of the surface sub-goal `q.index` is measured from: the
+/// stage's ([`stage_surface`]), except for the release (the placing
+/// stage's last sub-goal, where the suction lets go), which is measured
+/// from the box's floor: the table, z = 0, which every box stands on.
+fn target_surface(q: &SubGoalQuery) -> f32 {
+    match (q.stage, q.index) {
+        (Stage::Placing, 2..) => 0.0,
+        _ => stage_surface(q),
+    }
+}
+
+/// The scale of sub-goal `q.index`'s height in the planner's outputs
+/// ([`RELEASE_HEIGHT_SCALE`] at the release, else 1).
+fn height_scale(q: &SubGoalQuery) -> f32 {
+    match (q.stage, q.index) {
+        (Stage::Placing, 2..) => RELEASE_HEIGHT_SCALE,
+        _ => 1.0,
+    }
+}
+
+/// The sub-goal planner's input row: the cup tip's radius relative to the
+/// feature's, the tip's height over the stage's surface (the product's
+/// top face when picking; when placing, the held product's bottom over
+/// the box's rim), the turn from the tip's azimuth to the feature's (the
+/// shorter way), the stage and the sub-goal index one-hot.
+///
+/// No height is an input by itself. The expert's hover, pick, "above the
+/// slot" and release are each a fixed distance over a surface
+/// ([`subgoal_output`]), its approach the higher of the tip and a fixed
+/// distance over the rim, so a box deeper or a product taller than any
+/// taught is planned for like the others: with
+/// the box's rim and the product's height as inputs, the planner had to
+/// extrapolate to heights no cell taught, and beyond them it missed
+/// sideways as well (a box 160 mm deep, taught 60 to 100 mm: releases
+/// 3 cm off the slot).
+///
+/// Nothing says where the feature is around or away from the base: the
+/// expert's sub-goals do not depend on it, and a model that could not see
+/// it cannot learn to depend on it (a slot at a radius no demonstration
+/// used is planned for like the others).
 pub fn subgoal_input(q: &SubGoalQuery) -> [f32; SUBGOAL_INPUTS] {
     let (rf, af) = polar(q.feature, q.base);
     let (rt, at) = polar(q.tool, q.base);
@@ -193,26 +246,31 @@ pub fn subgoal_input(q: &SubGoalQuery) -> [f32; SUBGOAL_INPUTS] {
         Stage::Placing => 1,
     };
     let mut x = [0.0; SUBGOAL_INPUTS];
-    x[..5].copy_from_slice(&[
+    x[..3].copy_from_slice(&[
         rt - rf,
-        q.tool[2] - q.feature[2],
-        10.0 * q.feature[2],
+        q.tool[2] - carried(q) - stage_surface(q),
         wrap(af - at),
-        10.0 * q.height,
     ]);
-    x[5 + stage] = 1.0;
-    x[7 + q.index.min(2)] = 1.0;
+    x[3 + stage] = 1.0;
+    x[5 + q.index.min(2)] = 1.0;
     x
 }
 
 /// The planner's target for `target`, relative to the feature: its
-/// radius and height minus the feature's, and its azimuth from the
-/// feature's (times [`ARC_SCALE`]). Above a product or a slot these are
-/// constants; the approach point's are half the cup tip's offsets.
+/// radius minus the feature's; its height over the sub-goal's surface
+/// ([`target_surface`]: the product's top face when picking; when
+/// placing, the held product's bottom over the rim, or over the floor at
+/// the release, times [`RELEASE_HEIGHT_SCALE`]); and its azimuth from
+/// the feature's (times [`ARC_SCALE`]). Above a product or a slot, and at the release, these
+/// are constants; the approach point's are half the cup tip's offsets.
 pub fn subgoal_output(q: &SubGoalQuery, target: [f32; 3]) -> [f32; 3] {
     let (r, a) = polar(target, q.base);
     let (rf, af) = polar(q.feature, q.base);
-    [r - rf, target[2] - q.feature[2], ARC_SCALE * wrap(a - af)]
+    [
+        r - rf,
+        height_scale(q) * (target[2] - carried(q) - target_surface(q)),
+        ARC_SCALE * wrap(a - af),
+    ]
 }
 
 /// The cup-tip position an output of the planner stands for.
@@ -222,7 +280,7 @@ pub fn subgoal_position(q: &SubGoalQuery, out: [f32; 3]) -> [f32; 3] {
     [
         q.base[0] + r * a.cos(),
         q.base[1] + r * a.sin(),
-        q.feature[2] + out[1],
+        target_surface(q) + carried(q) + out[1] / height_scale(q),
     ]
 }
 
@@ -252,10 +310,13 @@ mod tests {
     #[test]
     fn sub_goal_outputs_round_trip() {
         for base in [[0.0, 0.0, 0.0], [0.2, -0.1, 0.3]] {
-            for stage in [Stage::Picking, Stage::Placing] {
+            for (stage, index) in [Stage::Picking, Stage::Placing]
+                .into_iter()
+                .flat_map(|s| (0..3).map(move |i| (s, i)))
+            {
                 let q = SubGoalQuery {
                     stage,
-                    index: 1,
+                    index,
                     feature: [-0.5, 0.1, 0.08],
                     tool: [0.6, -0.3, 0.2],
                     height: 0.05,
@@ -266,6 +327,37 @@ mod tests {
                 for j in 0..3 {
                     assert!((back[j] - target[j]).abs() < 1e-5, "{back:?}");
                 }
+            }
+        }
+    }
+
+    /// "Above the slot" (the held product 50 mm over the rim) and the
+    /// release (5 mm over the floor), asked from the same place over the
+    /// rim, read and write the same numbers whatever the box's depth and
+    /// the product's height: nothing for the planner to extrapolate in a
+    /// box deeper or for a product taller than any taught.
+    #[test]
+    fn a_box_of_any_depth_and_a_product_of_any_height_read_the_same() {
+        let encoded = |rim: f32, height: f32| {
+            let query = |index| SubGoalQuery {
+                stage: Stage::Placing,
+                index,
+                feature: [0.1, 0.6, rim],
+                tool: [0.15, 0.55, rim + height + 0.07],
+                height,
+                base: [0.0, 0.0, 0.2],
+            };
+            let above = subgoal_output(&query(1), [0.1, 0.6, rim + height + 0.05]);
+            let release = subgoal_output(&query(2), [0.1, 0.6, height + 0.005]);
+            let mut all = subgoal_input(&query(2)).to_vec();
+            all.extend(above);
+            all.extend(release);
+            all
+        };
+        let taught = encoded(0.08, 0.04);
+        for (rim, height) in [(0.06, 0.025), (0.1, 0.06), (0.25, 0.12), (0.4, 0.15)] {
+            for (a, b) in taught.iter().zip(encoded(rim, height)) {
+                assert!((a - b).abs() < 1e-5, "{rim} {height}: {a} against {b}");
             }
         }
     }
