@@ -7,7 +7,9 @@
 //! listed priority; gen_5 has its box and products on opposite sides (the
 //! swing back from the box is 180 degrees). The learned planner must pack
 //! them without falling back to RRT-Connect too. These seeds are
-//! development seeds, not the README's reported family.
+//! development seeds, not the README's reported family. The rest run the
+//! bundled model on development cells where it once fell back, and on a
+//! hand-written cell unlike every generated one (tests/cells/).
 
 mod common;
 use common::{packwright, scratch};
@@ -225,6 +227,42 @@ fn a_release_kept_inside_a_narrow_deep_box_is_raised_clear_of_the_rim() {
 #[test]
 fn the_way_up_from_a_release_near_a_narrow_boxs_wall_takes_finer_via_points() {
     packs_without_fallback(2612, SuiteKind::Case1N, "05");
+}
+
+/// Development cell 2616: a box 66 mm wide, whose inside (58 mm) is
+/// narrower than the cup's padded diameter (60 mm). No release inside it
+/// is free: the expert lets go above the rim (its release raised until
+/// free), while a colliding learned release could rise only 2 cm above
+/// the expert's nominal one (a fallback at every release). The cap is
+/// now 2 cm above where the expert lets go from there: none.
+#[test]
+fn a_release_into_a_box_narrower_than_the_cup_rises_as_the_experts_does() {
+    packs_without_fallback(2616, SuiteKind::Case1N1, "01");
+}
+
+/// A cell unlike every generated one (tests/cells/deep_carton.pack): a
+/// carton 200 mm deep and products up to 120 mm tall, where the bundled
+/// model learned from boxes 60 to 100 mm deep and products up to 60 mm.
+/// With the rim's height and the product's height as inputs, the sub-goal
+/// planner put releases 3 cm off their slots there (fallbacks); its
+/// heights are now over surfaces. Near the base the forearm then met the
+/// carton's wall at the bottom of the carton, where the expert lets go
+/// higher up: the learned release now may too.
+#[test]
+fn a_deeper_box_and_taller_products_than_any_taught_are_packed_without_fallback() {
+    for scenario in ["deep_case1/01", "deep_case2/02"] {
+        let out = packwright(&[
+            "execute",
+            "tests/cells/deep_carton.pack",
+            "--scenario",
+            scenario,
+            "--json",
+        ]);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+        let report = json(&out);
+        assert_eq!(report["complete"], true, "{report}");
+        assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+    }
 }
 
 /// Scenario `number` of suite `kind` of generated cell `seed`, executed

@@ -175,7 +175,10 @@ pub(super) fn with_room(arm: &Arm, start: &Joints, end: Joints) -> Joints {
 }
 
 /// How far above the expert's release, or the learned release when that
-/// is higher, (m) a learned release whose motion collides may be raised: a
+/// is higher, (m) a learned release whose motion collides may be raised
+/// (where the expert's own release from there is raised too, because the
+/// arm cannot reach the floor of a deep box or the cup does not fit in a
+/// narrow one: this far above where the expert lets go): a
 /// learned release a little too low (the held product pressed into the
 /// floor) is let go 1 or 2 cm up, as the expert lets go 5 mm up; one
 /// beside a wall is not raised until it is clear of the wall (measured:

@@ -190,6 +190,14 @@ impl<W: World> Learned<'_, W> {
         };
         match route(vec![end]) {
             Ok(route) => Ok(route),
+            // Every other way ends where this one does: where the end
+            // itself collides (a release a millimetre or two low, the
+            // held product on the floor), none of them is tried.
+            Err(Unchecked::Collides(hit))
+                if s.checker.check(&end, load.held, load.ignore).is_some() =>
+            {
+                Err(Shortfall::Collides { hit })
+            }
             Err(straight) => {
                 // A descent (into a slot, onto a top face) whose straight
                 // joint motion bows sideways into a wall: across to above
@@ -213,25 +221,45 @@ impl<W: World> Learned<'_, W> {
     }
 
     /// The policy's motion to `goal` raised [`RAISE_STEP`] at a time (at
-    /// most [`MAX_RAISES`] times, no higher than `ceiling`, while the
-    /// sub-goal's budget lasts): the first that [`Learned::rollout`]
-    /// reaches and finds free.
+    /// most [`MAX_RAISES`] times, to heights above `above` and no higher
+    /// than `ceiling`, while the sub-goal's budget lasts): the first that
+    /// [`Learned::rollout`] reaches and finds free.
     fn raised(
         &self,
         start: Joints,
         goal: [f64; 3],
         tolerance: f64,
         load: Load,
-        ceiling: f64,
+        (above, ceiling): (f64, f64),
         first_action_us: &mut Option<f64>,
     ) -> Option<Route> {
         (1..=MAX_RAISES)
             .map(|i| [goal[0], goal[1], goal[2] + RAISE_STEP * f64::from(i)])
+            .skip_while(|higher| higher[2] <= above)
             .take_while(|higher| higher[2] <= ceiling && !self.station.late())
             .find_map(|higher| {
                 self.rollout(start, higher, tolerance, load, first_action_us)
                     .ok()
             })
+    }
+
+    /// The height at which the expert lets go of sub-goal `k` of `plan`
+    /// (a release) from `start`: its release, raised (up to `ceiling`)
+    /// as far as its straight descent needs ([`Station::solve`]); `None`
+    /// where it finds none.
+    fn experts_release(
+        &self,
+        k: usize,
+        plan: &StagePlan,
+        start: Joints,
+        load: Load,
+        ceiling: f64,
+    ) -> Option<f64> {
+        let s = &self.station;
+        let solved = s
+            .solve(&plan.expert[k], k + 1, &start, 0.0, load, ceiling)
+            .ok()?;
+        Some(s.tip(&solved.joints)[2])
     }
 
     /// The rest of a stage's sub-goal `k` (from 0) by RRT-Connect: to
@@ -388,16 +416,47 @@ impl<W: World> Learned<'_, W> {
                 // A release whose motion collides is raised only as far
                 // as one too low needs: up to COLLIDING_RELEASE_RAISE above
                 // the expert's (or itself, when higher).
-                let ceiling = if release_collides(switch, &rolled) {
-                    ceiling.min(plan.expert[k].tip[2].max(goal[2]) + COLLIDING_RELEASE_RAISE)
+                let colliding = release_collides(switch, &rolled);
+                let room = ceiling;
+                let mut ceiling = if colliding {
+                    room.min(plan.expert[k].tip[2].max(goal[2]) + COLLIDING_RELEASE_RAISE)
                 } else {
-                    ceiling
+                    room
                 };
                 if rolled.is_err()
-                    && let Some(route) =
-                        self.raised(start, goal, tolerance, load, ceiling, &mut first_action_us)
+                    && let Some(route) = self.raised(
+                        start,
+                        goal,
+                        tolerance,
+                        load,
+                        (goal[2], ceiling),
+                        &mut first_action_us,
+                    )
                 {
                     rolled = Ok(route);
+                }
+                // Where the expert's own release from here is raised too
+                // (the arm cannot reach so deep: a deep box near the base,
+                // the forearm over its wall; or the cup does not fit in
+                // the box), as far above that.
+                if colliding
+                    && rolled.is_err()
+                    && !self.station.late()
+                    && let Some(experts) = self.experts_release(k, plan, start, load, room)
+                    && experts > plan.expert[k].tip[2]
+                {
+                    let above = ceiling;
+                    ceiling = room.min(experts.max(goal[2]) + COLLIDING_RELEASE_RAISE);
+                    if let Some(route) = self.raised(
+                        start,
+                        goal,
+                        tolerance,
+                        load,
+                        (above, ceiling),
+                        &mut first_action_us,
+                    ) {
+                        rolled = Ok(route);
+                    }
                 }
                 // A release whose product or cup would touch the box's
                 // wall (a learned sub-goal a few millimetres off in a
@@ -424,7 +483,7 @@ impl<W: World> Learned<'_, W> {
                                 kept,
                                 BACK_UP_REACHED,
                                 load,
-                                ceiling,
+                                (kept[2], ceiling),
                                 &mut first_action_us,
                             )
                         })
