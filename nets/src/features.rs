@@ -5,8 +5,8 @@
 //! set of weights serves cells it was not taught (README, "Learning"):
 //!
 //! - a **node** (a product) is (selected, place along the taught chain,
-//!   distance from its goal, height of its bottom over the table), never
-//!   its position;
+//!   distance from its goal, raised over the table or not), never its
+//!   position;
 //! - a **slot** is where it lies relative to the held product's goal, so
 //!   the placing decision points at a slot by its geometry: any slot of any
 //!   cell, demonstrated or not;
@@ -31,8 +31,16 @@ pub const ACTION_SCALE: f32 = packwright_interface::record::MAX_ACTION as f32;
 
 /// Inputs per node: selected (0/1), place along the chain (0 for the first
 /// product seen to 1 for the last), distance from its goal (decimetres,
-/// at most 3), height of its bottom over the table (decimetres, 0 to 3).
+/// at most 3), and whether it is raised: the height of its bottom over
+/// the table in units of [`RAISED`], at most 1.
 pub const NODE_FEATURES: usize = 4;
+/// A product whose bottom is this high (m) over the table reads as raised
+/// (held): products stand on the table or on a box's floor, which is at
+/// table height, and a held one is carried the cell's `lift` up. In
+/// decimetres, as it was, the reasoner learned where "held" begins from
+/// the lifts it was taught (100-200 mm) and, with `lift 60 mm`, chose
+/// the held product again instead of the box.
+pub const RAISED: f32 = 0.03;
 /// The column of a node row holding its place along the chain.
 pub const PLACE: usize = 1;
 /// The node row without its place ([`own_row`]): what a node's score
@@ -141,7 +149,7 @@ pub fn node_rows(graph: &Graph) -> Vec<[f32; NODE_FEATURES]> {
                 if n.selected { 1.0 } else { 0.0 },
                 i as f32 / last,
                 (10.0 * away).clamp(0.0, 3.0),
-                (10.0 * bottom).clamp(0.0, 3.0),
+                (bottom / RAISED).clamp(0.0, 1.0),
             ]
         })
         .collect()
@@ -306,6 +314,7 @@ pub fn one_hot(out: &mut Vec<f32>, k: usize, n: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use packwright_interface::Node;
 
     #[test]
     fn sub_goal_outputs_round_trip() {
@@ -360,6 +369,29 @@ mod tests {
                 assert!((a - b).abs() < 1e-5, "{rim} {height}: {a} against {b}");
             }
         }
+    }
+
+    /// A held product reads as raised whatever the cell's lift (5 cm or
+    /// 40 cm), one on the table or on a box's floor (at table height) as
+    /// not: the reasoner tells them apart the same way in every cell.
+    #[test]
+    fn a_held_product_reads_as_raised_at_any_lift() {
+        let node = |bottom: f32| Node {
+            centre: [0.5, 0.1, bottom + 0.03],
+            height: 0.06,
+            selected: true,
+            goal: [0.0, 0.6, 0.03],
+        };
+        let raised = |bottom| {
+            node_rows(&Graph {
+                nodes: vec![node(bottom)],
+                ..Graph::default()
+            })[0][NODE_FEATURES - 1]
+        };
+        for lift in [0.05, 0.1, 0.15, 0.4] {
+            assert_eq!(raised(lift), 1.0, "lift {lift}");
+        }
+        assert_eq!(raised(0.0), 0.0);
     }
 
     /// Turning the whole arm (base joint and delta together) leaves the
