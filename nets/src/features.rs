@@ -207,23 +207,26 @@ fn stage_surface(q: &SubGoalQuery) -> f32 {
     }
 }
 
+/// Whether `q` asks for the release: the placing stage's last sub-goal,
+/// where the suction lets go.
+fn release(q: &SubGoalQuery) -> bool {
+    q.stage == Stage::Placing && q.index >= 2
+}
+
 /// The height of the surface sub-goal `q.index` is measured from: the
-/// stage's ([`stage_surface`]), except for the release (the placing
-/// stage's last sub-goal, where the suction lets go), which is measured
+/// stage's ([`stage_surface`]), except for the release, which is measured
 /// from the box's floor: the table, z = 0, which every box stands on.
 fn target_surface(q: &SubGoalQuery) -> f32 {
-    match (q.stage, q.index) {
-        (Stage::Placing, 2..) => 0.0,
-        _ => stage_surface(q),
-    }
+    if release(q) { 0.0 } else { stage_surface(q) }
 }
 
 /// The scale of sub-goal `q.index`'s height in the planner's outputs
 /// ([`RELEASE_HEIGHT_SCALE`] at the release, else 1).
 fn height_scale(q: &SubGoalQuery) -> f32 {
-    match (q.stage, q.index) {
-        (Stage::Placing, 2..) => RELEASE_HEIGHT_SCALE,
-        _ => 1.0,
+    if release(q) {
+        RELEASE_HEIGHT_SCALE
+    } else {
+        1.0
     }
 }
 
@@ -237,11 +240,10 @@ fn height_scale(q: &SubGoalQuery) -> f32 {
 /// slot" and release are each a fixed distance over a surface
 /// ([`subgoal_output`]), its approach the higher of the tip and a fixed
 /// distance over the rim, so a box deeper or a product taller than any
-/// taught is planned for like the others: with
-/// the box's rim and the product's height as inputs, the planner had to
-/// extrapolate to heights no cell taught, and beyond them it missed
-/// sideways as well (a box 160 mm deep, taught 60 to 100 mm: releases
-/// 3 cm off the slot).
+/// taught is planned for like the others: with the box's rim and the
+/// product's height as inputs, the planner had to extrapolate to heights
+/// no cell taught, and beyond them it missed sideways as well (a box
+/// 160 mm deep, taught 60 to 100 mm: releases 3 cm off the slot).
 ///
 /// Nothing says where the feature is around or away from the base: the
 /// expert's sub-goals do not depend on it, and a model that could not see
@@ -270,8 +272,9 @@ pub fn subgoal_input(q: &SubGoalQuery) -> [f32; SUBGOAL_INPUTS] {
 /// ([`target_surface`]: the product's top face when picking; when
 /// placing, the held product's bottom over the rim, or over the floor at
 /// the release, times [`RELEASE_HEIGHT_SCALE`]); and its azimuth from
-/// the feature's (times [`ARC_SCALE`]). Above a product or a slot, and at the release, these
-/// are constants; the approach point's are half the cup tip's offsets.
+/// the feature's (times [`ARC_SCALE`]). Above a product or a slot, and
+/// at the release, these are constants; the approach point's are half
+/// the cup tip's offsets.
 pub fn subgoal_output(q: &SubGoalQuery, target: [f32; 3]) -> [f32; 3] {
     let (r, a) = polar(target, q.base);
     let (rf, af) = polar(q.feature, q.base);
