@@ -8,8 +8,8 @@
 //! swing back from the box is 180 degrees). The learned planner must pack
 //! them without falling back to RRT-Connect too. These seeds are
 //! development seeds, not the README's reported family. The rest run the
-//! bundled model on development cells where it once fell back, and on a
-//! hand-written cell unlike every generated one (tests/cells/).
+//! bundled model on development cells where it once fell back, and on
+//! hand-written cells unlike every generated one (tests/cells/).
 
 mod common;
 use common::{packwright, scratch};
@@ -270,17 +270,16 @@ fn a_cell_that_lifts_its_products_less_than_any_taught_is_packed() {
 /// Scenario `scenario` of the cell file `pack`, executed with the bundled
 /// model: the package complete, with no fallback.
 fn file_packs_without_fallback(pack: &str, scenario: &str) {
-    let out = packwright(&["execute", pack, "--scenario", scenario, "--json"]);
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
-    let report = json(&out);
-    assert_eq!(report["complete"], true, "{report}");
-    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+    complete_without_fallback(&executes_file(pack, scenario));
 }
 
 /// Scenario `number` of suite `kind` of generated cell `seed`, executed
 /// with the bundled model: the package complete, with no fallback.
 fn packs_without_fallback(seed: u64, kind: SuiteKind, number: &str) {
-    let report = executes_with_the_bundled_model(seed, kind, number);
+    complete_without_fallback(&executes_with_the_bundled_model(seed, kind, number));
+}
+
+fn complete_without_fallback(report: &serde_json::Value) {
     assert_eq!(report["complete"], true, "{report}");
     assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
 }
@@ -292,10 +291,16 @@ fn executes_with_the_bundled_model(seed: u64, kind: SuiteKind, number: &str) -> 
     let dir = scratch("generalisation", &cell.name);
     let pack = dir.join(cell.file_name());
     fs::write(&pack, &cell.text).expect("generated file written");
-    let pack = pack.display().to_string();
     let scenario = format!("{}/{number}", cell.suite(kind).name);
-    let out = packwright(&["execute", &pack, "--scenario", &scenario, "--json"]);
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let report = executes_file(&pack.display().to_string(), &scenario);
     let _ = fs::remove_dir_all(&dir);
+    report
+}
+
+/// Scenario `scenario` of the cell file `pack`, executed with the bundled
+/// model (exit 0): the JSON report.
+fn executes_file(pack: &str, scenario: &str) -> serde_json::Value {
+    let out = packwright(&["execute", pack, "--scenario", scenario, "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
     json(&out)
 }
