@@ -711,7 +711,6 @@ impl Builder {
     }
 
     /// A size-like length (cube edge, suction, lift, jitter).
-    /// A size-like length (cube edge, suction, lift, jitter).
     fn length(&mut self, p: P) -> Length {
         self.length_with(p, true)
     }
