@@ -467,6 +467,24 @@ pub struct GenerateArgs {
     /// demonstrations.
     #[arg(long, value_enum, value_name = "RULE")]
     pub sequence: Option<TaughtOrder>,
+    /// Which cells to draw. `standard` is what the bundled model was taught
+    /// on and the README reports on (gen_SEED.pack); `wide` draws the same
+    /// recipe with what a line engineer's cell may have and ours rarely
+    /// does: boxes to 300 mm deep, products to 150 mm tall, lifts from 20
+    /// mm, cups 50-200 mm, risers to 400 mm, half of the cells slowed with
+    /// `speed` (wide_SEED.pack). Develop on wide cells to find what the
+    /// standard ones hide.
+    #[arg(long, value_enum, value_name = "FAMILY", default_value_t = CellFamily::Standard)]
+    pub family: CellFamily,
+}
+
+/// The cells `generate` draws (`--family`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CellFamily {
+    /// Boxes 60-100 mm deep, products 25-60 mm, lifts 100-200 mm.
+    Standard,
+    /// Deep boxes, tall products, short lifts, long cups, high risers.
+    Wide,
 }
 
 /// A sequence rule `generate` can teach (`--sequence`).

@@ -1,13 +1,22 @@
 //! Random valid cells, for tests and benchmarks: develop on many random
 //! cells, report on fixed seeds.
 //!
-//! [`family_cell`] turns a seed into one self-contained `.pack` file: a
+//! [`generated_cell`] turns a seed into one self-contained `.pack` file: a
 //! UR10 cell (base offset, sometimes on a riser; a box on one side of the
 //! robot and the pending area on another), 4 to 10 products, one
 //! inventory, one sparse `demos` block (n = 2 or 3 products, half of the
 //! combinations, one or two slots never used, a random sequence rule) and
 //! six `scenarios` suites that measure what the demonstrations did not
 //! show: larger orders, CASE 2, missing stock and the untaught slots.
+//!
+//! Two families share that recipe ([`Family`]): the standard cells
+//! (`gen_<seed>`, [`family_cell`]), which the bundled model was taught on
+//! and the reported figures come from, and the wide cells (`wide_<seed>`)
+//! with the sizes a line engineer's cell may have and ours rarely do:
+//! deep boxes, tall products, short lifts, long or short cups, high
+//! risers, a slowed arm. A wide seed draws in the same order as a
+//! standard one, from wider ranges, so adding the family changed no
+//! standard cell.
 //!
 //! Pure and deterministic: every draw comes from one
 //! `ChaCha8Rng::seed_from_u64(seed)`, so the same seed gives the same bytes
@@ -49,6 +58,100 @@ pub const REACH_MAX_MM: i64 = 950;
 pub const OPPOSITE_PRODUCT_REACH_MM: i64 = 600;
 /// Most slots in a box.
 pub const MAX_SLOTS: usize = 9;
+
+/// Which cells a seed draws: the same recipe (sides, layout, teaching,
+/// suites) with different ranges for the sizes a line engineer's cell may
+/// have and ours rarely do.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Family {
+    /// The cells the bundled model was taught on and the reported cells
+    /// are drawn from (`gen_<seed>`): boxes 60-100 mm deep, products 25-60
+    /// mm, lifts 100-200 mm, cups 80-120 mm, risers to 300 mm, full speed.
+    Standard,
+    /// Cells unlike those (`wide_<seed>`): boxes to 300 mm deep, products
+    /// 30-80 mm across and to 150 mm tall (at most twice their narrow
+    /// side, so that they stand), lifts from 20 mm, cups 50-200 mm, risers
+    /// to 400 mm, about half of them slowed (`speed`).
+    Wide,
+}
+
+impl Family {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Family::Standard => "standard",
+            Family::Wide => "wide",
+        }
+    }
+
+    /// The prefix of the cell's name (and file stem).
+    fn prefix(self) -> &'static str {
+        match self {
+            Family::Standard => "gen",
+            Family::Wide => "wide",
+        }
+    }
+
+    /// The `generate` options that draw this family, as the file's header
+    /// quotes them.
+    fn option(self) -> &'static str {
+        match self {
+            Family::Standard => "",
+            Family::Wide => " --family wide",
+        }
+    }
+
+    fn ranges(self) -> Ranges {
+        match self {
+            Family::Standard => Ranges {
+                cube: (30, 60),
+                across: (30, 60),
+                tall: (25, 60),
+                riser: (50, 300),
+                suction: (80, 120),
+                lift: (100, 200),
+                box_depth: (60, 100),
+                speed: None,
+            },
+            Family::Wide => Ranges {
+                cube: (30, 80),
+                across: (30, 80),
+                tall: (25, 150),
+                riser: (50, 400),
+                suction: (50, 200),
+                lift: (20, 300),
+                box_depth: (60, 300),
+                speed: Some((20, 100)),
+            },
+        }
+    }
+}
+
+/// How many times its narrow side a box-shaped product may be tall: one
+/// taller topples when it is let go a few centimetres up (over 100 wide
+/// cells with products to 7 times as tall as wide, every product the
+/// scripted expert dropped beside its slot was over 2 times, or 20 to 25
+/// mm thin).
+const STANDS: i64 = 2;
+
+/// Inclusive millimetre (or per cent) ranges of one family's draws.
+struct Ranges {
+    /// A cube's edge.
+    cube: (i64, i64),
+    /// A box-shaped product's width and depth.
+    across: (i64, i64),
+    /// A box-shaped product's height.
+    tall: (i64, i64),
+    /// The riser's height, when the robot stands on one (a third of cells).
+    riser: (i64, i64),
+    suction: (i64, i64),
+    /// The `lift`, when the cell gives one (half of cells).
+    lift: (i64, i64),
+    /// The box's inside depth (its `size` z).
+    box_depth: (i64, i64),
+    /// The `speed` in per cent, given by half of the cells when `Some`.
+    speed: Option<(i64, i64)>,
+}
 
 /// Where something stands, seen from the robot (world frame = table:
 /// front is +x, left is +y).
@@ -184,6 +287,7 @@ pub struct GeneratedSuite {
 /// about it without compiling it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Generated {
+    pub family: Family,
     pub seed: u64,
     /// `gen_<seed>`: the cell's name and the file's stem. Every global
     /// name in the file starts with it, so that several generated files
@@ -216,6 +320,8 @@ pub struct Generated {
     pub pending_side: Side,
     /// The base, metres (z > 0: on a riser).
     pub base: [f64; 3],
+    /// The `speed` in per cent, if the cell gives one.
+    pub speed: Option<i64>,
     pub suites: Vec<GeneratedSuite>,
 }
 
@@ -243,12 +349,17 @@ impl Generated {
     }
 }
 
-/// The name of the cell (and file stem) for `seed`.
+/// The name of the standard cell (and file stem) for `seed`.
 pub fn cell_name(seed: u64) -> String {
-    format!("gen_{seed}")
+    family_cell_name(Family::Standard, seed)
 }
 
-/// The suite of `kind` of the cell generated from `seed`.
+/// The name of the cell of `family` (and file stem) for `seed`.
+pub fn family_cell_name(family: Family, seed: u64) -> String {
+    format!("{}_{seed}", family.prefix())
+}
+
+/// The suite of `kind` of the standard cell generated from `seed`.
 pub fn suite_name(seed: u64, kind: SuiteKind) -> String {
     format!("{}_{}", cell_name(seed), kind.suffix())
 }
@@ -426,6 +537,7 @@ fn draw_layout(
     pending_side: Side,
     products: &[Product],
     slot_count: usize,
+    depth: (i64, i64),
 ) -> Option<Layout> {
     let largest = products
         .iter()
@@ -446,7 +558,7 @@ fn draw_layout(
     let r0 = stepped(rng, 450, 600, 10);
     let t0 = stepped(rng, -50, 50, 10);
     let margin = stepped(rng, 10, 25, 5);
-    let height = stepped(rng, 60, 100, 10);
+    let height = stepped(rng, depth.0, depth.1, 10);
     let mut slots = Vec::with_capacity(slot_count);
     for i in 0..slot_count {
         let (row, col) = ((i / cols) as i64, (i % cols) as i64);
@@ -559,19 +671,26 @@ fn layout_is_valid(l: &Layout, base: [i64; 2], products: &[Product], product_rea
     true
 }
 
-/// The cell generated from `seed`: see the module documentation.
+/// The standard cell generated from `seed`: see the module documentation.
 pub fn family_cell(seed: u64) -> Generated {
     family_cell_taught(seed, None)
 }
 
-/// The cell generated from `seed`, taught in the order `rule` when given
-/// (else the seed's own): the same cell, products and suites; the
-/// teaching is the same block in that order. Cells that teach one model
-/// together must agree on the rule (`train` infers one rule from all its
-/// demonstrations).
+/// The standard cell generated from `seed`, taught in the order `rule`
+/// when given: [`generated_cell`] of [`Family::Standard`].
 pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
+    generated_cell(Family::Standard, seed, rule)
+}
+
+/// The cell of `family` generated from `seed`, taught in the order `rule`
+/// when given (else the seed's own): the same cell, products and suites;
+/// the teaching is the same block in that order. Cells that teach one
+/// model together must agree on the rule (`train` infers one rule from all
+/// its demonstrations).
+pub fn generated_cell(family: Family, seed: u64, rule: Option<Sequence>) -> Generated {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let name = cell_name(seed);
+    let name = family_cell_name(family, seed);
+    let ranges = family.ranges();
 
     // Sizes: n, m, slots, untaught slots, such that the sparse teaching
     // gives a good number of demonstrations.
@@ -590,14 +709,15 @@ pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
         .map(|i| {
             let cube = rng.random_bool(0.5);
             let size = if cube {
-                let l = stepped(&mut rng, 30, 60, 5);
+                let l = stepped(&mut rng, ranges.cube.0, ranges.cube.1, 5);
                 [l, l, l]
             } else {
-                [
-                    stepped(&mut rng, 30, 60, 5),
-                    stepped(&mut rng, 30, 60, 5),
-                    stepped(&mut rng, 25, 60, 5),
-                ]
+                let (across, tall) = (ranges.across, ranges.tall);
+                let w = stepped(&mut rng, across.0, across.1, 5);
+                let d = stepped(&mut rng, across.0, across.1, 5);
+                // Stands: at most STANDS times as tall as its narrow side.
+                let high = tall.1.min(STANDS * w.min(d));
+                [w, d, stepped(&mut rng, tall.0, high, 5)]
             };
             let mass = rng
                 .random_bool(1.0 / 3.0)
@@ -619,15 +739,15 @@ pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
         stepped(&mut rng, -300, 300, 10),
         stepped(&mut rng, -300, 300, 10),
         if rng.random_bool(1.0 / 3.0) {
-            stepped(&mut rng, 50, 300, 10)
+            stepped(&mut rng, ranges.riser.0, ranges.riser.1, 10)
         } else {
             0
         },
     ];
-    let suction = stepped(&mut rng, 80, 120, 5);
+    let suction = stepped(&mut rng, ranges.suction.0, ranges.suction.1, 5);
     let lift = rng
         .random_bool(0.5)
-        .then(|| stepped(&mut rng, 100, 200, 10));
+        .then(|| stepped(&mut rng, ranges.lift.0, ranges.lift.1, 10));
     let layout = (0..1000)
         .find_map(|_| {
             draw_layout(
@@ -637,6 +757,7 @@ pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
                 pending_side,
                 &products,
                 slot_count,
+                ranges.box_depth,
             )
         })
         .expect("a valid layout within 1000 draws");
@@ -703,7 +824,7 @@ pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
             };
             GeneratedSuite {
                 kind,
-                name: suite_name(seed, kind),
+                name: format!("{name}_{}", kind.suffix()),
                 n,
                 slots,
                 count: SUITE_COUNT,
@@ -711,6 +832,16 @@ pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
             }
         })
         .collect();
+
+    // Draws only a family with a speed makes, after all the others, so
+    // that the rest of a standard cell is what it always was.
+    let speed = ranges
+        .speed
+        .and_then(|(low, high)| {
+            rng.random_bool(0.5)
+                .then(|| stepped(&mut rng, low, high, 10))
+        })
+        .filter(|&s| s < 100);
 
     let demonstrations = demonstrations(m, taught_slots.len(), n) as usize * repeat;
     let inventory = format!("{name}_stock");
@@ -725,7 +856,8 @@ pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
     };
     let _ = writeln!(
         t,
-        "# {name}: a random cell from `packwright generate --seed {seed}`;"
+        "# {name}: a random cell from `packwright generate{} --seed {seed}`;",
+        family.option()
     );
     let _ = writeln!(t, "# regenerate it rather than edit it.");
     let _ = writeln!(t, "# The box stands {}.", box_side.phrase());
@@ -743,6 +875,9 @@ pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
     let _ = writeln!(t, "  suction {suction} mm");
     if let Some(lift) = lift {
         let _ = writeln!(t, "  lift {lift} mm");
+    }
+    if let Some(speed) = speed {
+        let _ = writeln!(t, "  speed {speed} %");
     }
     let _ = writeln!(
         t,
@@ -856,6 +991,7 @@ pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
     }
 
     Generated {
+        family,
         seed,
         name,
         text: t,
@@ -873,6 +1009,7 @@ pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
         box_side,
         pending_side,
         base: base.map(|v| v as f64 / 1000.0),
+        speed,
         suites,
     }
 }

@@ -2,10 +2,10 @@
 //! generator is `packwright_pipeline::generate`; this is the file edge).
 
 use crate::Exit;
-use crate::cli::{GenerateArgs, TaughtOrder};
+use crate::cli::{CellFamily, GenerateArgs, TaughtOrder};
 use crate::fsio::write_file_atomically;
 use anyhow::{Context, bail};
-use packwright_pipeline::generate::{Sequence, family_cell_taught};
+use packwright_pipeline::generate::{Family, Sequence, generated_cell};
 use std::fs;
 
 pub fn run(args: &GenerateArgs) -> anyhow::Result<Exit> {
@@ -29,8 +29,12 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<Exit> {
         TaughtOrder::Descending => Sequence::Descending,
         TaughtOrder::Listed => Sequence::Listed,
     });
+    let family = match args.family {
+        CellFamily::Standard => Family::Standard,
+        CellFamily::Wide => Family::Wide,
+    };
     for seed in args.seed..=last {
-        let generated = family_cell_taught(seed, rule);
+        let generated = generated_cell(family, seed, rule);
         let path = args.output.join(generated.file_name());
         write_file_atomically(&path, generated.text.as_bytes())?;
         outln!("{}", path.display());
