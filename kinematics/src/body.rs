@@ -116,6 +116,37 @@ pub fn arm_parts(arm: &Arm, suction: f64, padding: f64) -> Vec<ArmPart> {
     parts
 }
 
+/// The room the last link (the wrist's end, just above the cup) takes
+/// round the tool axis: its shapes' farthest reach from the flange's z
+/// axis, and how far they reach past the flange face towards the tool
+/// (negative: they stop short of it), metres, without padding; `None`
+/// for a last link without shapes. With the cup down, the link goes into
+/// a box only as far as this radius fits inside the walls.
+pub fn wrist_around_tool(arm: &Arm) -> Option<(f64, f64)> {
+    let link = arm.links.last()?;
+    let to_flange = arm.flange.inverse();
+    // Each shape's points (in the flange frame) and the radius round them.
+    let points = link.shapes.iter().flat_map(|s| match s {
+        Shape::Capsule { a, b, radius } => vec![(to_flange * a, *radius), (to_flange * b, *radius)],
+        Shape::Cuboid { pose, half } => (0..8)
+            .map(|i| {
+                let corner = Point3::new(
+                    if i & 1 == 0 { -half.x } else { half.x },
+                    if i & 2 == 0 { -half.y } else { half.y },
+                    if i & 4 == 0 { -half.z } else { half.z },
+                );
+                (to_flange * (pose * corner), 0.0)
+            })
+            .collect(),
+    });
+    points.fold(None, |room, (p, r)| {
+        let (radial, past) = (p.x.hypot(p.y) + r, p.z + r);
+        Some(room.map_or((radial, past), |(a, b): (f64, f64)| {
+            (a.max(radial), b.max(past))
+        }))
+    })
+}
+
 /// Whether parts `a` and `b` are the same link or neighbours along the
 /// chain (the cup's neighbour is the last link): never checked.
 pub fn adjacent(a: usize, b: usize) -> bool {
@@ -458,5 +489,20 @@ mod tests {
         }
         assert!(adjacent(CUP, DOF) && !adjacent(CUP, DOF - 1));
         assert_eq!(part_body(&arm, CUP), Body::Cup);
+    }
+
+    /// The UR10's wrist 3 housing (ur10.urdf): a cylinder of radius 45
+    /// mm round the tool axis from 90 to 10 mm above the flange, its
+    /// capsule rounded 45 mm past each end.
+    #[test]
+    fn the_wrist_round_the_tool_axis_is_read_from_the_last_link() {
+        let (radius, past) = wrist_around_tool(&Arm::ur10()).expect("shapes");
+        assert!((radius - 0.045).abs() < 1e-9, "{radius}");
+        assert!((past - 0.035).abs() < 1e-9, "{past}");
+        let mut bare = Arm::ur10();
+        if let Some(last) = bare.links.last_mut() {
+            last.shapes.clear();
+        }
+        assert_eq!(wrist_around_tool(&bare), None);
     }
 }

@@ -5,9 +5,12 @@
 //! - [`swing_via`]: a goal far round the base, through a via half way;
 //! - [`descent_vias`]: down the vertical over a release or a top face,
 //!   where the straight joint motion bows into a wall;
+//! - [`level_vias`]: across at the higher end's height, where a swing
+//!   out of or past a deep box comes down or rises over its rim;
 //! - [`held_at_limits`] and [`with_room`]: the base and wrist 3 near their
 //!   limits held there, or turned the other way round;
-//! - [`Inside`]: a colliding release moved just inside the box's walls;
+//! - [`Inside`]: a colliding release moved just inside the box's walls
+//!   (the product's, the cup's and, deep in a box, the wrist's room);
 //!   [`COLLIDING_RELEASE_RAISE`] bounds how far one is raised.
 //!
 //! Invariants: each guard is bounded (a 2 cm raise, a 6 mm move, a via
@@ -94,6 +97,40 @@ pub fn descent_vias(
     let drop = a[2] - b[2];
     if drop <= 0.0 || 2.0 * (b[0] - a[0]).hypot(b[1] - a[1]) >= drop {
         return None;
+    }
+    level_vias(arm, base, suction, start, end, tolerance, action)
+}
+
+/// A motion that goes across at the higher of its two ends' heights: one
+/// that ends lower than it starts goes across to above the end, then
+/// down, as [`descent_vias`]; one that ends higher goes up over its start
+/// first (reached by the policy's steps within `tolerance`), then to
+/// `end`. Swings past a deep box whose steps and straight joint motion
+/// came down while still over it (a long cup out of a 300 mm box) or rose
+/// only as they went over it (a product carried the long way round the
+/// base, past the box's rim) cross at the height of the higher end
+/// instead (both on wide development cells). `None` for a motion that
+/// stays level (within `tolerance`), or steps that fall short or leave
+/// the limits.
+pub fn level_vias(
+    arm: &Arm,
+    base: &Isometry3<f64>,
+    suction: f64,
+    start: Joints,
+    end: Joints,
+    tolerance: f64,
+    action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
+) -> Option<Vec<Joints>> {
+    let tip = |q: &Joints| -> [f64; 3] { arm.tool_tip(base, q, suction).coords.into() };
+    let (a, b) = (tip(&start), tip(&end));
+    if (a[2] - b[2]).abs() <= tolerance {
+        return None;
+    }
+    if a[2] < b[2] {
+        let up = [a[0], a[1], b[2]];
+        let steps = policy_steps(arm, base, suction, start, up, tolerance, action).ok()?;
+        let near = steps.last().copied().unwrap_or(start);
+        return arm.within_limits(&near).then(|| vec![near, end]);
     }
     let mut near = start;
     let mut vias = Vec::with_capacity(DESCENT_VIAS);
@@ -208,9 +245,11 @@ pub(super) fn release_collides(switch: Suction, rolled: &Result<Route, Shortfall
 /// The cup-tip positions (x and y, m) from which a held product, let go,
 /// stands clear of its box's inner walls by its padding and
 /// [`KEPT_MARGIN`], with the cup clear of them too when the tip is
-/// below the rim: the box's inside shrunk by the product's half-extents in
-/// the world (moved by where the product hangs from the cup) and by the
-/// cup's padded radius. An axis where they do not fit is left as it is.
+/// below the rim, and the wrist ([`Inside::with_wrist`]) when the tip is
+/// so low that the wrist goes into the box: the box's inside shrunk by
+/// the product's half-extents in the world (moved by where the product
+/// hangs from the cup), by the cup's padded radius, by the wrist's. An
+/// axis where they do not fit is left as it is.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Inside {
     /// For the product: lowest and highest x, then y.
@@ -219,6 +258,37 @@ pub(super) struct Inside {
     cup: [(f64, f64); 2],
     /// The box's rim height: the cup goes into the box below it.
     rim: f64,
+    /// For the wrist, where it goes into the box.
+    wrist: Option<Wrist>,
+}
+
+/// The wrist's end round the tool axis as [`Inside`] keeps it from the
+/// walls: a ball (the rounded end of a capsule round the axis, padded)
+/// over the cup's tip, and the box's inside.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Wrist {
+    /// The box's inner walls: lowest and highest x, then y.
+    walls: [(f64, f64); 2],
+    /// The padded ball's radius.
+    radius: f64,
+    /// Its centre's height over the cup's tip.
+    above_tip: f64,
+}
+
+impl Wrist {
+    /// How far from the walls the tool axis stays with the tip at height
+    /// `tip` (the ball's width at the rim, all of it below): `None` when
+    /// the ball is above the rim.
+    fn clearance(&self, tip: f64, rim: f64) -> Option<f64> {
+        let over = tip + self.above_tip - rim;
+        (over < self.radius).then(|| {
+            if over <= 0.0 {
+                self.radius
+            } else {
+                (self.radius * self.radius - over * over).sqrt()
+            }
+        })
+    }
 }
 
 impl Inside {
@@ -247,13 +317,54 @@ impl Inside {
             product: [0, 1].map(|a| bound(a, extent(a) + HELD_PADDING, grip[a])),
             cup: [0, 1].map(|a| bound(a, CUP_RADIUS + PADDING, 0.0)),
             rim: held.size[2],
+            wrist: None,
         })
     }
 
-    /// `goal` moved into the inside on each axis where everything fits
-    /// (the nearest such point; `goal` itself when it is inside already);
-    /// `None` when nothing fits on either axis.
+    /// Keeping the wrist inside the walls too, where it goes into the box:
+    /// a short cup in a deep box, where the expert's release stops just
+    /// clear of a wall and a learned one a few millimetres off meets it
+    /// (wrist 3 on the wall of a 270 mm box, 95 mm cup, on a wide
+    /// development cell). `wrist` is the radius and reach past the flange of
+    /// [`wrist_around_tool`](packwright_kinematics::body::wrist_around_tool);
+    /// the cup is `suction` long, pointing down.
+    pub(super) fn with_wrist(
+        mut self,
+        cell: &CellScene,
+        b: usize,
+        suction: f64,
+        wrist: Option<(f64, f64)>,
+    ) -> Inside {
+        if let (Some(held), Some((radius, past))) = (cell.boxes.get(b), wrist) {
+            self.wrist = Some(Wrist {
+                walls: [0, 1].map(|a| {
+                    let w = held.size[a] / 2.0 - BOX_WALL;
+                    (held.centre[a] - w, held.centre[a] + w)
+                }),
+                radius: radius + PADDING,
+                // The ball's centre is `radius` short of the lowest point.
+                above_tip: suction - (past - radius),
+            });
+        }
+        self
+    }
+
+    /// `goal` moved into the inside on each axis where the product and the
+    /// cup fit (the nearest such point; `goal` itself when it is inside
+    /// already), and the wrist too on each axis where it fits as well,
+    /// unless that moves the goal more than [`KEEP_INSIDE`] (where the
+    /// wrist needs more, the expert's release is raised too: the
+    /// product's walls are what a kept release at the learned height can
+    /// still keep); `None` when nothing fits on either axis.
     pub(super) fn keep(&self, goal: [f64; 3]) -> Option<[f64; 3]> {
+        let plain = self.kept(goal, false)?;
+        let wrist = self
+            .kept(goal, true)
+            .filter(|k| (k[0] - goal[0]).hypot(k[1] - goal[1]) <= KEEP_INSIDE);
+        Some(wrist.unwrap_or(plain))
+    }
+
+    fn kept(&self, goal: [f64; 3], with_wrist: bool) -> Option<[f64; 3]> {
         let mut kept = goal;
         let mut fits = false;
         for axis in 0..2 {
@@ -262,10 +373,22 @@ impl Inside {
                 lo = lo.max(self.cup[axis].0);
                 hi = hi.min(self.cup[axis].1);
             }
-            if lo <= hi {
-                kept[axis] = goal[axis].clamp(lo, hi);
-                fits = true;
+            if lo > hi {
+                continue;
             }
+            if let Some(wrist) = self.wrist.filter(|_| with_wrist)
+                && let Some(by) = wrist.clearance(goal[2], self.rim)
+            {
+                let (l, h) = (
+                    lo.max(wrist.walls[axis].0 + by + KEPT_MARGIN),
+                    hi.min(wrist.walls[axis].1 - by - KEPT_MARGIN),
+                );
+                if l <= h {
+                    (lo, hi) = (l, h);
+                }
+            }
+            kept[axis] = goal[axis].clamp(lo, hi);
+            fits = true;
         }
         fits.then_some(kept)
     }
@@ -278,6 +401,7 @@ mod tests {
     use nalgebra::Point3;
     use nalgebra::Vector3;
     use packwright_interface::scene::BoxSpec;
+    use packwright_kinematics::body::wrist_around_tool;
     /// A cell with one box, 350 mm wide and 80 mm deep, 80 mm high,
     /// centred at (-0.2, 0.65): 36 mm from its centre line to the inside
     /// of its long walls.
@@ -336,6 +460,50 @@ mod tests {
         // Above the rim, the cup is not in the box: the product's bound.
         let high = [-0.2, 0.665, 0.09];
         assert!((turned.keep(high).expect("moved")[1] - 0.662).abs() < 1e-9);
+    }
+
+    /// The narrow box's short walls are 171 mm from its centre inside;
+    /// the UR10's wrist 3 ends in a ball of radius 45 mm (55 padded) 10
+    /// mm above the flange, 95 mm above the tip of the 85 mm cup: it
+    /// meets the 80 mm rim when the tip is below 80 - 95 + 55 = 40 mm,
+    /// and all of it is in the box below -15 mm. The tool axis is kept
+    /// 171 - 55 - 1 = 115 mm from the centre then, 171 - 44 - 1 = 126 mm
+    /// with the tip at 18 mm (the ball 33 mm below the rim at its centre,
+    /// 44 mm wide there); the cup (30 mm, 140) and the 40 mm wide product
+    /// (147) have room to 130 mm. Across the box (y) the wrist does not
+    /// fit, and the product is kept inside alone; a wrist that needs more
+    /// than a 6 mm move is left out too.
+    #[test]
+    fn a_release_deep_in_a_box_keeps_the_wrist_inside_the_walls_too() {
+        let cell = narrow_box();
+        let inside = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(0.0))
+            .expect("the box exists");
+        let wrist = wrist_around_tool(&Arm::ur10());
+        let deep = inside.with_wrist(&cell, 0, cell.suction, wrist);
+        let at = |x: f64, y: f64, z: f64| [-0.2 + x, 0.65 + y, z];
+        assert_eq!(
+            inside.keep(at(0.13, 0.0, 0.018)),
+            Some(at(0.13, 0.0, 0.018)),
+            "no wrist: inside"
+        );
+        let kept = deep.keep(at(0.119, 0.004, -0.02)).expect("moved");
+        assert!((kept[0] - (-0.2 + 0.115)).abs() < 1e-9, "{kept:?}");
+        assert!(
+            (kept[1] - 0.652).abs() < 1e-9,
+            "the product alone: {kept:?}"
+        );
+        assert_eq!(kept[2], -0.02, "z stays");
+        let kept = deep.keep(at(0.13, 0.0, 0.018)).expect("moved");
+        assert!((kept[0] - (-0.2 + 0.126)).abs() < 1e-9, "{kept:?}");
+        let far = at(0.13, 0.004, -0.02);
+        assert_eq!(deep.keep(far), inside.keep(far), "15 mm for the wrist");
+        let above = at(0.13, 0.0, 0.041);
+        assert_eq!(deep.keep(above), Some(above), "the wrist above the rim");
+        assert_eq!(
+            inside.with_wrist(&cell, 0, cell.suction, None),
+            inside,
+            "a last link without shapes"
+        );
     }
 
     #[test]
@@ -465,6 +633,29 @@ mod tests {
         let aside = at([x, y + 0.2, 0.11], &start).expect("reachable");
         assert_eq!(
             descent_vias(&arm, &base, suction, start, aside, tolerance, &mut act),
+            None
+        );
+        // Mostly sideways, across at the higher end's height: down at the
+        // end going one way, up at the start going back.
+        let vias = level_vias(&arm, &base, suction, start, aside, tolerance, &mut act)
+            .expect("lower at its end");
+        assert_eq!(vias.last(), Some(&aside));
+        let first = tip(&vias[0]);
+        assert!(
+            (first[0] - x).hypot(first[1] - (y + 0.2)) <= tolerance,
+            "{first:?}"
+        );
+        assert!((first[2] - 0.25).abs() <= tolerance, "{first:?}");
+        let back = level_vias(&arm, &base, suction, aside, start, tolerance, &mut act)
+            .expect("higher at its end");
+        assert_eq!(back.len(), 2);
+        assert_eq!(back.last(), Some(&start));
+        let up = tip(&back[0]);
+        assert!((up[0] - x).hypot(up[1] - (y + 0.2)) <= tolerance, "{up:?}");
+        assert!((up[2] - 0.25).abs() <= tolerance, "{up:?}");
+        let level = at([x, y + 0.2, 0.25], &start).expect("reachable");
+        assert_eq!(
+            level_vias(&arm, &base, suction, start, level, tolerance, &mut act),
             None
         );
     }

@@ -25,8 +25,8 @@ use super::{checked_samples, expected_next};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
 use guards::{
-    COLLIDING_RELEASE_RAISE, Inside, KEEP_INSIDE, descent_vias, held_at_limits, release_collides,
-    swing_via, with_room,
+    COLLIDING_RELEASE_RAISE, Inside, KEEP_INSIDE, descent_vias, held_at_limits, level_vias,
+    release_collides, swing_via, with_room,
 };
 use nalgebra::Vector3;
 use packwright_interface::outcome::{
@@ -34,6 +34,7 @@ use packwright_interface::outcome::{
     Violation,
 };
 use packwright_interface::{Graph, OrderTask, Policy, SequenceRule, SubGoalQuery, World};
+use packwright_kinematics::body::wrist_around_tool;
 use packwright_kinematics::{Arm, Joints};
 use std::time::Instant;
 use steps::BACK_UP_REACHED;
@@ -211,11 +212,16 @@ impl<W: World> Learned<'_, W> {
                 }
                 // Through every step instead (passing through them), when
                 // they stay within the limits.
-                if steps.iter().all(|q| s.arm.within_limits(q)) {
-                    route(steps).map_err(|_| why(straight))
-                } else {
-                    Err(why(straight))
+                if steps.iter().all(|q| s.arm.within_limits(q))
+                    && let Ok(route) = route(steps)
+                {
+                    return Ok(route);
                 }
+                // Across at the higher end's height.
+                let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
+                level_vias(arm, base, suction, start, end, tolerance, act)
+                    .and_then(|vias| route(vias).ok())
+                    .ok_or_else(|| why(straight))
             }
         }
     }
@@ -490,6 +496,35 @@ impl<W: World> Learned<'_, W> {
                 {
                     goals[k] = kept;
                     rolled = Ok(route);
+                }
+                // Kept inside again at each raised height: across a box
+                // narrower than the wrist, the wrist fits only as it rises
+                // out over the rim, and only near the middle (a 120 mm
+                // carton 300 mm deep, on a wide development cell: the
+                // expert lets go 12 cm up, the kept release 2 mm beside it
+                // put wrist 3 on the wall). Only points the pass above did
+                // not try.
+                if release_collides(switch, &rolled)
+                    && let Some(inside) = plan.inside
+                {
+                    let tried = inside.keep(not_low);
+                    let found = (1..=MAX_RAISES)
+                        .map(|i| not_low[2] + RAISE_STEP * f64::from(i))
+                        .take_while(|h| *h <= ceiling && !self.station.late())
+                        .filter_map(|h| inside.keep([goal[0], goal[1], h]))
+                        .filter(|kept| {
+                            (kept[0] - goal[0]).hypot(kept[1] - goal[1]) <= KEEP_INSIDE
+                                && tried.is_none_or(|t| (t[0], t[1]) != (kept[0], kept[1]))
+                        })
+                        .find_map(|kept| {
+                            self.rollout(start, kept, BACK_UP_REACHED, load, &mut first_action_us)
+                                .ok()
+                                .map(|route| (kept, route))
+                        });
+                    if let Some((kept, route)) = found {
+                        goals[k] = kept;
+                        rolled = Ok(route);
+                    }
                 }
                 if let Some(action_us) = first_action_us {
                     self.station.timing.network_us.push(subgoal_us + action_us);
@@ -804,7 +839,16 @@ impl<W: World> Learned<'_, W> {
                 load: Load::holding(&held),
                 gripped: None,
                 expert,
-                inside: Inside::new(cell, cell.slots[s].box_index, spec.size, grip, &flange),
+                inside: Inside::new(cell, cell.slots[s].box_index, spec.size, grip, &flange).map(
+                    |inside| {
+                        inside.with_wrist(
+                            cell,
+                            cell.slots[s].box_index,
+                            cell.suction,
+                            wrist_around_tool(self.station.arm),
+                        )
+                    },
+                ),
             },
             lift,
             false,
