@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Learn and measure on a family of random cells (`packwright generate`):
-# for each seed, generate gen_SEED.pack, compile it, train a model on its
-# sparse demonstrations and evaluate its six suites (CASE 1 with n, n+1 and
-# n+2 products, CASE 2, missing stock, untaught slots) with the baselines,
-# then print one row per suite and planner.
+# for each seed, generate gen_SEED.pack (wide_SEED.pack with FAMILY=wide),
+# compile it, train a model on its sparse demonstrations and evaluate its
+# six suites (CASE 1 with n, n+1 and n+2 products, CASE 2, missing stock,
+# untaught slots) with the baselines, then print one row per suite and
+# planner.
 #
 # Develop on many random seeds; report on the fixed ones below.
 #
@@ -12,11 +13,14 @@
 #   PACKWRIGHT  the binary (default: target/release/packwright)
 #   WORK        where the files go (default: a new directory under /tmp);
 #               per seed: gen_SEED.pack, gen_SEED.out/, gen_SEED.model/,
-#               gen_SEED.eval.json
+#               gen_SEED.eval.json (wide_SEED... with FAMILY=wide)
 #   TRAIN_ARGS  extra arguments for `packwright train` (e.g. "--epochs 50")
 #   EVAL_ARGS   arguments for `packwright eval` (default: --baselines, the
 #               expert and RRT-Connect beside the learned planner; set it
 #               empty for the learned planner alone, three times faster)
+#   FAMILY      the cells: standard (default; gen_SEED, the reported
+#               family) or wide (wide_SEED: deep boxes, tall products,
+#               short lifts; `packwright generate --help`)
 
 set -euo pipefail
 
@@ -38,29 +42,36 @@ read -ra train_args <<<"${TRAIN_ARGS:-}"
 read -ra eval_args <<<"${EVAL_ARGS---baselines}"
 work=${WORK:-$(mktemp -d "${TMPDIR:-/tmp}/packwright-family.XXXXXX")}
 mkdir -p "$work"
+family=${FAMILY:-standard}
+case $family in
+  standard) prefix=gen ;;
+  wide) prefix=wide ;;
+  *) echo "family.sh: FAMILY must be standard or wide, not $family" >&2; exit 2 ;;
+esac
 
 for seed in "${seeds[@]}"; do
-  pack=$work/gen_$seed.pack
-  echo "== gen_$seed" >&2
-  "$bin" generate --seed "$seed" -o "$work" >/dev/null
-  "$bin" compile "$pack" -o "$work/gen_$seed.out" >&2
+  cell=${prefix}_$seed
+  pack=$work/$cell.pack
+  echo "== $cell" >&2
+  "$bin" generate --family "$family" --seed "$seed" -o "$work" >/dev/null
+  "$bin" compile "$pack" -o "$work/$cell.out" >&2
   # Exit 1: some demonstration could not be replayed; the model is written.
   rc=0
-  "$bin" train "$work/gen_$seed.out" -o "$work/gen_$seed.model" --quiet \
+  "$bin" train "$work/$cell.out" -o "$work/$cell.model" --quiet \
     ${train_args[@]+"${train_args[@]}"} >&2 || rc=$?
   if [ "$rc" -gt 1 ]; then
-    echo "family.sh: training gen_$seed failed (exit $rc)" >&2
+    echo "family.sh: training $cell failed (exit $rc)" >&2
     exit "$rc"
   fi
-  "$bin" eval "$pack" --model "$work/gen_$seed.model" --quiet \
+  "$bin" eval "$pack" --model "$work/$cell.model" --quiet \
     ${eval_args[@]+"${eval_args[@]}"} --json \
-    >"$work/gen_$seed.eval.json"
+    >"$work/$cell.eval.json"
 done
 
 # Summary: one row per suite and planner (SR = whole-system success rate).
 echo "files in $work"
 if ! command -v jq >/dev/null; then
-  echo "(install jq for the summary table; the figures are in $work/gen_*.eval.json)"
+  echo "(install jq for the summary table; the figures are in $work/${prefix}_*.eval.json)"
   exit 0
 fi
 {
@@ -69,6 +80,6 @@ fi
     jq -r '
       def pct: if . == null then "-" else (.rate * 100 | round / 100 | tostring) end;
       .rows[] | [.suite, .planner, .scenarios, (.reasoner_sr | pct), (.sr | pct)] | @tsv
-    ' "$work/gen_$seed.eval.json"
+    ' "$work/${prefix}_$seed.eval.json"
   done
 } | column -t -s $'\t'
