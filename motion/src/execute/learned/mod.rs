@@ -239,14 +239,30 @@ impl<W: World> Learned<'_, W> {
         (above, ceiling): (f64, f64),
         first_action_us: &mut Option<f64>,
     ) -> Option<Route> {
+        self.raise_heights(goal[2], (above, ceiling)).find_map(|z| {
+            self.rollout(
+                start,
+                [goal[0], goal[1], z],
+                tolerance,
+                load,
+                first_action_us,
+            )
+            .ok()
+        })
+    }
+
+    /// The heights a release at height `from` is raised to, [`RAISE_STEP`]
+    /// at a time (at most [`MAX_RAISES`] times), above `above` and no
+    /// higher than `ceiling`, while the sub-goal's budget lasts.
+    fn raise_heights(
+        &self,
+        from: f64,
+        (above, ceiling): (f64, f64),
+    ) -> impl Iterator<Item = f64> + '_ {
         (1..=MAX_RAISES)
-            .map(|i| [goal[0], goal[1], goal[2] + RAISE_STEP * f64::from(i)])
-            .skip_while(|higher| higher[2] <= above)
-            .take_while(|higher| higher[2] <= ceiling && !self.station.late())
-            .find_map(|higher| {
-                self.rollout(start, higher, tolerance, load, first_action_us)
-                    .ok()
-            })
+            .map(move |i| from + RAISE_STEP * f64::from(i))
+            .skip_while(move |z| *z <= above)
+            .take_while(move |z| *z <= ceiling && !self.station.late())
     }
 
     /// The height at which the expert lets go of sub-goal `k` of `plan`
@@ -508,9 +524,8 @@ impl<W: World> Learned<'_, W> {
                     && let Some(inside) = plan.inside
                 {
                     let tried = inside.keep(not_low);
-                    let found = (1..=MAX_RAISES)
-                        .map(|i| not_low[2] + RAISE_STEP * f64::from(i))
-                        .take_while(|h| *h <= ceiling && !self.station.late())
+                    let found = self
+                        .raise_heights(not_low[2], (not_low[2], ceiling))
                         .filter_map(|h| inside.keep([goal[0], goal[1], h]))
                         .filter(|kept| {
                             (kept[0] - goal[0]).hypot(kept[1] - goal[1]) <= KEEP_INSIDE
