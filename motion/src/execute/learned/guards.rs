@@ -258,17 +258,17 @@ pub(super) struct Inside {
     cup: [(f64, f64); 2],
     /// The box's rim height: the cup goes into the box below it.
     rim: f64,
+    /// The box's inner walls: lowest and highest x, then y.
+    walls: [(f64, f64); 2],
     /// For the wrist, where it goes into the box.
     wrist: Option<Wrist>,
 }
 
 /// The wrist's end round the tool axis as [`Inside`] keeps it from the
 /// walls: a ball (the rounded end of a capsule round the axis, padded)
-/// over the cup's tip, and the box's inside.
+/// over the cup's tip.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Wrist {
-    /// The box's inner walls: lowest and highest x, then y.
-    walls: [(f64, f64); 2],
     /// The padded ball's radius.
     radius: f64,
     /// Its centre's height over the cup's tip.
@@ -317,6 +317,10 @@ impl Inside {
             product: [0, 1].map(|a| bound(a, extent(a) + HELD_PADDING, grip[a])),
             cup: [0, 1].map(|a| bound(a, CUP_RADIUS + PADDING, 0.0)),
             rim: held.size[2],
+            walls: [0, 1].map(|a| {
+                let w = held.size[a] / 2.0 - BOX_WALL;
+                (held.centre[a] - w, held.centre[a] + w)
+            }),
             wrist: None,
         })
     }
@@ -328,24 +332,12 @@ impl Inside {
     /// development cell). `wrist` is the radius and reach past the flange of
     /// [`wrist_around_tool`](packwright_kinematics::body::wrist_around_tool);
     /// the cup is `suction` long, pointing down.
-    pub(super) fn with_wrist(
-        mut self,
-        cell: &CellScene,
-        b: usize,
-        suction: f64,
-        wrist: Option<(f64, f64)>,
-    ) -> Inside {
-        if let (Some(held), Some((radius, past))) = (cell.boxes.get(b), wrist) {
-            self.wrist = Some(Wrist {
-                walls: [0, 1].map(|a| {
-                    let w = held.size[a] / 2.0 - BOX_WALL;
-                    (held.centre[a] - w, held.centre[a] + w)
-                }),
-                radius: radius + PADDING,
-                // The ball's centre is `radius` short of the lowest point.
-                above_tip: suction - (past - radius),
-            });
-        }
+    pub(super) fn with_wrist(mut self, suction: f64, wrist: Option<(f64, f64)>) -> Inside {
+        self.wrist = wrist.map(|(radius, past)| Wrist {
+            radius: radius + PADDING,
+            // The ball's centre is `radius` short of the lowest point.
+            above_tip: suction - (past - radius),
+        });
         self
     }
 
@@ -380,8 +372,8 @@ impl Inside {
                 && let Some(by) = wrist.clearance(goal[2], self.rim)
             {
                 let (l, h) = (
-                    lo.max(wrist.walls[axis].0 + by + KEPT_MARGIN),
-                    hi.min(wrist.walls[axis].1 - by - KEPT_MARGIN),
+                    lo.max(self.walls[axis].0 + by + KEPT_MARGIN),
+                    hi.min(self.walls[axis].1 - by - KEPT_MARGIN),
                 );
                 if l <= h {
                     (lo, hi) = (l, h);
@@ -479,7 +471,7 @@ mod tests {
         let inside = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(0.0))
             .expect("the box exists");
         let wrist = wrist_around_tool(&Arm::ur10());
-        let deep = inside.with_wrist(&cell, 0, cell.suction, wrist);
+        let deep = inside.with_wrist(cell.suction, wrist);
         let at = |x: f64, y: f64, z: f64| [-0.2 + x, 0.65 + y, z];
         assert_eq!(
             inside.keep(at(0.13, 0.0, 0.018)),
@@ -500,7 +492,7 @@ mod tests {
         let above = at(0.13, 0.0, 0.041);
         assert_eq!(deep.keep(above), Some(above), "the wrist above the rim");
         assert_eq!(
-            inside.with_wrist(&cell, 0, cell.suction, None),
+            inside.with_wrist(cell.suction, None),
             inside,
             "a last link without shapes"
         );

@@ -855,14 +855,7 @@ impl<W: World> Learned<'_, W> {
                 gripped: None,
                 expert,
                 inside: Inside::new(cell, cell.slots[s].box_index, spec.size, grip, &flange).map(
-                    |inside| {
-                        inside.with_wrist(
-                            cell,
-                            cell.slots[s].box_index,
-                            cell.suction,
-                            wrist_around_tool(self.station.arm),
-                        )
-                    },
+                    |inside| inside.with_wrist(cell.suction, wrist_around_tool(self.station.arm)),
                 ),
             },
             lift,
