@@ -307,6 +307,16 @@ fn a_product_carried_the_long_way_round_rises_before_it_passes_the_box() {
     wide_packs_without_fallback(123, SuiteKind::Case1N1, "02");
 }
 
+/// A wide development cell (`generate --family wide --seed 258`): a 200
+/// mm cup over a 115 mm product waiting right under the start pose. The
+/// start was chosen without the products and leaned the upper arm
+/// through it, so every planner's first motion collided (no package of
+/// the cell packed); it is now chosen clear of what stands there.
+#[test]
+fn the_start_pose_over_a_tall_product_is_clear_of_it() {
+    wide_packs_without_fallback(258, SuiteKind::Case1N, "01");
+}
+
 /// Scenario `scenario` of the cell file `pack`, executed with the bundled
 /// model: the package complete, with no fallback.
 fn file_packs_without_fallback(pack: &str, scenario: &str) {

@@ -14,6 +14,7 @@ use packwright_interface::scene::{
     BoxSpec, CellScene, DEFAULT_MASS, Placement, ProductSpec, SlotSpec,
 };
 use packwright_kinematics::{Arm, Joints, from_urdf};
+use packwright_motion::collision::ProductBody;
 use packwright_motion::execute;
 use packwright_sim::Simulator;
 
@@ -25,10 +26,23 @@ pub struct Episode {
 }
 
 impl Episode {
-    /// The arm's start pose (over the pending area).
+    /// The arm's start pose (over the pending area), clear of the products
+    /// standing in the cell where a branch is.
     pub fn home(&self) -> Result<Joints> {
-        execute::home(&self.arm, &self.task.cell).ok_or_else(|| PipelineError::NoStartPose {
-            cell: self.task.cell.name.clone(),
+        let standing: Vec<ProductBody> = self
+            .placements
+            .iter()
+            .map(|p| ProductBody {
+                name: p.product.name.clone(),
+                centre: p.centre,
+                size: p.product.size,
+                yaw: 0.0,
+            })
+            .collect();
+        execute::home_among(&self.arm, &self.task.cell, &standing).ok_or_else(|| {
+            PipelineError::NoStartPose {
+                cell: self.task.cell.name.clone(),
+            }
         })
     }
 

@@ -31,7 +31,7 @@ pub use reachable::{Reachability, Unreached};
 pub use reasoner::{demonstrated_decisions, expected_next, graph, reasoner_trial};
 pub use station::{
     HOME_HEIGHT, Load, PlanningBudget, STOP_CLEARANCE, Unchecked, checked_blend, checked_samples,
-    home, home_tip, reach,
+    home, home_among, home_tip, reach,
 };
 
 use packwright_interface::outcome::{PlannerKind, Report};

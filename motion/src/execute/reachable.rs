@@ -46,7 +46,7 @@ pub struct Reachability {
 impl Reachability {
     pub fn new(arm: &Arm, cell: &CellScene) -> Reachability {
         let checker = Checker::new(arm, cell);
-        let start = home_on(&checker, cell);
+        let start = home_on(&checker, cell, &[]);
         Reachability {
             checker,
             cell: cell.clone(),

@@ -1124,19 +1124,34 @@ pub fn home_tip(cell: &CellScene) -> [f64; 3] {
     [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, HOME_HEIGHT]
 }
 
-/// The start pose: the cup [`HOME_HEIGHT`] over the middle of the pending
-/// area, pointing down, collision-free, on the branch nearest the usual UR
+/// The start pose: the cup [`HOME_HEIGHT`] over the middle of the
+/// pending area, pointing down, collision-free, on the branch nearest the usual UR
 /// "ready" pose among those that can go straight down from there to
 /// [`START_CHECK_HEIGHT`] over the table (any free one if none can). A
 /// branch that cannot (the upper arm pointing back over the table, the
 /// elbow below it) sends the first descent through the arm's stretched
 /// pose, folding the forearm into the cup.
 pub fn home(arm: &Arm, cell: &CellScene) -> Option<Joints> {
-    home_on(&Checker::new(arm, cell), cell)
+    home_among(arm, cell, &[])
 }
 
-/// [`home`] with the cell's checker already built.
-pub(crate) fn home_on(checker: &Checker, cell: &CellScene) -> Option<Joints> {
+/// [`home`] with the products standing in the cell (`standing`, where
+/// they wait at the start): a branch whose arm meets one of them is taken
+/// only where every free branch does (then the first motion reports the
+/// collision). A cup close to the base over tall products can put the
+/// elbow of the branch nearest "ready" down among them.
+pub fn home_among(arm: &Arm, cell: &CellScene, standing: &[ProductBody]) -> Option<Joints> {
+    home_on(&Checker::new(arm, cell), cell, standing)
+}
+
+/// [`home_among`] with the cell's checker already built (its fixtures
+/// only: the descent it tries is a proxy for reaching down to a small
+/// product, not a motion among the standing ones).
+pub(crate) fn home_on(
+    checker: &Checker,
+    cell: &CellScene,
+    standing: &[ProductBody],
+) -> Option<Joints> {
     let top = home_tip(cell);
     let low = Point3::new(top[0], top[1], START_CHECK_HEIGHT);
     let free: Vec<Joints> = solutions(checker, Point3::from(top), 0.0, &READY)
@@ -1147,7 +1162,23 @@ pub(crate) fn home_on(checker: &Checker, cell: &CellScene) -> Option<Joints> {
         reach(checker, low, 0.0, q, Load::FREE)
             .is_some_and(|down| checker.check_motion(q, &down, None, None).is_none())
     };
-    free.iter().find(descends).or(free.first()).copied()
+    let among = (!standing.is_empty()).then(|| {
+        let mut among = checker.clone();
+        among.set_products(standing);
+        among
+    });
+    let clear = |q: &&Joints| {
+        among
+            .as_ref()
+            .is_none_or(|c| c.check(q, None, None).is_none())
+    };
+    free.iter()
+        .filter(clear)
+        .find(descends)
+        .or_else(|| free.iter().find(clear))
+        .or_else(|| free.iter().find(descends))
+        .or(free.first())
+        .copied()
 }
 
 /// The usual UR "ready" pose: where the start pose's inverse kinematics

@@ -262,3 +262,58 @@ fn a_solved_release_is_routed_with_the_motion_its_solve_checked() {
     assert!(first.is_some_and(|q| joint_distance(q, &start) < 1e-6));
     assert!(last.is_some_and(|q| joint_distance(q, &solved.joints) < 1e-6));
 }
+
+/// Wide development cell 258: a 200 mm cup over a 115 mm product waiting
+/// right under the start, 0.43 m from the base. The branch nearest
+/// "ready" that can go down leans the upper arm forward through that
+/// product (the elbow 8 cm over the table), so the first motion of every
+/// package collided, for every planner. Told what stands there, the start
+/// is on a branch clear of it; where the nearest branch is clear anyway,
+/// it is unchanged.
+#[test]
+fn the_start_pose_keeps_clear_of_the_products_waiting_under_it() {
+    let arm = Arm::ur10();
+    let mut cell = common::bench_cell();
+    cell.base = [-0.19, 0.04, 0.0];
+    cell.suction = 0.2;
+    cell.pending = ([0.18, -0.27], [0.30, 0.41]);
+    cell.boxes[0].centre = [-0.66, 0.07];
+    cell.boxes[0].size = [0.13, 0.63, 0.14];
+    for (i, slot) in cell.slots.iter_mut().enumerate() {
+        slot.position = [-0.66, 0.32 - 0.1 * i as f64];
+    }
+    let under_start = ProductBody {
+        name: "tall".into(),
+        centre: [0.24, 0.07, 0.0575],
+        size: [0.08, 0.06, 0.115],
+        yaw: 0.0,
+    };
+    let standing = [under_start];
+    let mut among = Checker::new(&arm, &cell);
+    among.set_products(&standing);
+
+    let blind = home(&arm, &cell).expect("a start pose");
+    assert!(
+        among.check(&blind, None, None).is_some(),
+        "the cell no longer shows the case: {blind:?}"
+    );
+    let start = home_among(&arm, &cell, &standing).expect("a start pose");
+    assert_eq!(among.check(&start, None, None), None, "{start:?}");
+    let tip = arm.tool_tip(among.base(), &start, cell.suction);
+    let want = home_tip(&cell);
+    assert!((tip - Point3::from(want)).norm() < 1e-6, "{tip:?}");
+
+    // A product off to the side leaves the start where it was.
+    let aside = ProductBody {
+        name: "aside".into(),
+        centre: [0.65, -0.45, 0.04],
+        size: [0.05, 0.05, 0.08],
+        yaw: 0.0,
+    };
+    let bench = common::bench_cell();
+    assert_eq!(
+        home_among(&arm, &bench, &[aside]),
+        home(&arm, &bench),
+        "a clear start changed"
+    );
+}
