@@ -89,6 +89,41 @@ fn every_error_case_reports_its_diagnostics() {
     }
 }
 
+/// A warning is printed with the file's summary, and `check` still exits
+/// 0: the input compiles, and may fail on the robot depending on what
+/// happens first. With `--json`, each warning is a diagnostic line of
+/// severity `warning`, counted in the summary.
+#[test]
+fn every_warning_case_checks_with_its_warnings() {
+    let cases = pack_files("tests/cases/warn");
+    assert!(!cases.is_empty(), "expected the warning cases");
+    for case in &cases {
+        let out = packwright(&["check", case]);
+        assert_eq!(out.status.code(), Some(0), "{case}: {}", text(&out.stderr));
+        assert!(out.stdout.is_empty(), "{case}: warnings go to stderr");
+        let stderr = text(&out.stderr);
+        assert!(stderr.contains("warning["), "{case}: no warning:\n{stderr}");
+        insta::assert_snapshot!(format!("warn__{}", snapshot_name(case)), stderr);
+
+        let json = packwright(&["check", "--json", case]);
+        assert_eq!(json.status.code(), Some(0));
+        let lines: Vec<serde_json::Value> = text(&json.stdout)
+            .lines()
+            .map(|l| serde_json::from_str(l).expect("each line is JSON"))
+            .collect();
+        let warnings: Vec<_> = lines.iter().filter(|v| v["type"] == "diagnostic").collect();
+        assert!(!warnings.is_empty());
+        for w in &warnings {
+            assert_eq!(w["severity"], "warning", "{w}");
+            assert!(w["code"].as_str().is_some_and(|c| c.starts_with('W')));
+            assert!(w["help"].is_string(), "{w}");
+        }
+        let summary = lines.last().expect("a summary line");
+        assert_eq!(summary["errors"], 0);
+        assert_eq!(summary["warnings"], warnings.len());
+    }
+}
+
 #[test]
 fn every_valid_case_compiles_and_shows() {
     let cases = pack_files("tests/cases/ok");
@@ -217,6 +252,7 @@ fn exit_codes_and_json_lines() {
     assert_eq!(summary["type"], "summary");
     assert_eq!(summary["errors"], diagnostics);
     for d in lines.iter().filter(|v| v["type"] == "diagnostic") {
+        assert_eq!(d["severity"], "error");
         assert!(d["code"].as_str().is_some_and(|c| c.starts_with('E')));
         assert!(d["line"].as_u64().is_some_and(|l| l > 0));
         assert!(

@@ -3,6 +3,7 @@
 
 use crate::error::Error;
 use crate::source::{Loc, SourceMap};
+use crate::warning::Warning;
 use serde::Serialize;
 use std::fmt::Write;
 use unicode_width::UnicodeWidthChar;
@@ -36,6 +37,24 @@ pub fn render(sources: &SourceMap, error: &Error) -> String {
     if let Some(help) = error.help() {
         let _ = writeln!(out, "   = help: {help}");
     }
+    out
+}
+
+/// Renders one warning as text, as [`render`] does an error:
+///
+/// ```text
+/// warning[W001]: the robot cannot reach ...
+///   --> cells/line.pack:30:3
+/// ```
+pub fn render_warning(sources: &SourceMap, warning: &Warning) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "warning[{}]: {warning}", warning.code());
+    snippet(&mut out, sources, warning.at(), &warning.label());
+    for (loc, note) in warning.notes() {
+        let _ = writeln!(out, "note: {note}");
+        snippet(&mut out, sources, loc, "");
+    }
+    let _ = writeln!(out, "   = help: {}", warning.help());
     out
 }
 
@@ -77,9 +96,11 @@ fn snippet(out: &mut String, sources: &SourceMap, at: Loc, label: &str) {
     }
 }
 
-/// The machine-readable form of an error (`--json`).
+/// The machine-readable form of an error or a warning (`--json`).
 #[derive(Debug, Clone, Serialize)]
 pub struct JsonDiagnostic {
+    /// `error` or `warning`.
+    pub severity: Severity,
     pub code: &'static str,
     pub message: String,
     pub file: Option<String>,
@@ -101,6 +122,7 @@ pub fn to_json(sources: &SourceMap, error: &Error) -> JsonDiagnostic {
         },
     };
     JsonDiagnostic {
+        severity: Severity::Error,
         code: error.code(),
         message: error.to_string(),
         file,
@@ -108,5 +130,28 @@ pub fn to_json(sources: &SourceMap, error: &Error) -> JsonDiagnostic {
         column,
         label: error.label(),
         help: error.help(),
+    }
+}
+
+/// Whether a diagnostic stops the compilation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Severity {
+    Error,
+    Warning,
+}
+
+/// The machine-readable form of a warning (`--json`).
+pub fn warning_to_json(sources: &SourceMap, warning: &Warning) -> JsonDiagnostic {
+    let (file, line, column) = sources.position(warning.at());
+    JsonDiagnostic {
+        severity: Severity::Warning,
+        code: warning.code(),
+        message: warning.to_string(),
+        file: Some(file),
+        line: Some(line),
+        column: Some(column),
+        label: warning.label(),
+        help: Some(warning.help()),
     }
 }

@@ -169,6 +169,16 @@ pub enum Error {
         tip: [f64; 3],
     },
     #[error(
+        "the robot cannot start in cell `{cell}` while the products of inventory `{inventory}` stand there: every start pose over the middle of the `pending` area meets `{by}`"
+    )]
+    StartBlocked {
+        /// The entry of the product met.
+        at: Loc,
+        cell: String,
+        inventory: String,
+        by: String,
+    },
+    #[error(
         "product `{product}` does not fit in slot `{slot}`: it sticks out of box `{box_name}` by {by_mm:.0} mm"
     )]
     DoesNotFit {
@@ -285,6 +295,7 @@ impl Error {
             Error::ProductsOverlap { .. } => "E035",
             Error::OutOfReach { .. } => "E036",
             Error::Unreachable { .. } => "E039",
+            Error::StartBlocked { .. } => "E053",
             Error::DoesNotFit { .. } => "E037",
             Error::PlacedOverlap { .. } => "E038",
             Error::ChooseTooMany { .. } => "E040",
@@ -330,6 +341,7 @@ impl Error {
             | Error::ProductsOverlap { at, .. }
             | Error::OutOfReach { at, .. }
             | Error::Unreachable { at, .. }
+            | Error::StartBlocked { at, .. }
             | Error::DoesNotFit { at, .. }
             | Error::PlacedOverlap { at, .. }
             | Error::ChooseTooMany { at, .. }
@@ -382,6 +394,7 @@ impl Error {
                 "the tool tip would be at ({:.3}, {:.3}, {:.3})",
                 tip[0], tip[1], tip[2]
             ),
+            Error::StartBlocked { .. } => "the arm meets this product at its start".into(),
             Error::DoesNotFit { .. } => "does not fit".into(),
             Error::PlacedOverlap { .. } => "these products would collide in the box".into(),
             Error::ChooseTooMany { .. } => "too many".into(),
@@ -452,6 +465,7 @@ impl Error {
             Error::Unreachable { pose, .. } if pose.is_picking() => "move the product nearer the robot's base (or the `base` nearer the products), or lower the cell's `lift`; the cup (`suction`) reaches down from the wrist, so a shorter cup reaches further".into(),
             Error::Unreachable { pose: Pose::Approach, .. } => "the robot carries the product round its base axis, at the lift's height or clear of the box's rim if that is higher, half-way between the product and the slot: bring the product and the slot nearer each other, lower the cell's `lift`, or use a lower box".into(),
             Error::Unreachable { .. } => "move the slot (or its box) nearer the robot's base, or use a lower box: the product is held above the rim before it goes down".into(),
+            Error::StartBlocked { .. } => "the arm starts with its cup 0.35 m over the middle of the `pending` area, and every arm pose that puts it there meets this product: move the product away from the middle of the area, or move the area or the `base`".into(),
             Error::DoesNotFit { .. } => "move the slot further from the box wall, use a larger box, or put a smaller product there".into(),
             Error::PlacedOverlap { .. } => "move the slots further apart".into(),
             Error::ChooseTooMany { .. } => "lower N, or list more products and slots".into(),

@@ -22,12 +22,14 @@ pub mod output;
 pub mod resolve;
 pub mod source;
 pub mod validate;
+mod warning;
 pub mod workspace;
 
 pub use emit::{Written, file};
 pub use error::Error;
 pub use output::{Artifact, MemoryOutput, Output, OutputFile};
 pub use source::{FileId, Loader, Loc, MemoryLoader, SourceMap};
+pub use warning::Warning;
 pub use workspace::{Anywhere, Workspace};
 
 use std::path::PathBuf;
@@ -40,6 +42,8 @@ pub struct Compiled {
     pub expanded: expand::Expanded,
     /// The dataset's size (its samples are built only when emitted).
     pub shape: dataset::Shape,
+    /// What compiles but may fail on the robot.
+    pub warnings: Vec<Warning>,
 }
 
 impl Compiled {
@@ -102,10 +106,12 @@ pub fn check(
     if !errors.is_empty() {
         return Err(fail(loaded.sources, errors));
     }
-    let errors = workspace::check(&model, workspace);
+    let (errors, mut warnings) = workspace::check(&model, workspace);
     if !errors.is_empty() {
         return Err(fail(loaded.sources, errors));
     }
+    warnings.sort_by_key(Warning::at);
+    warnings.dedup();
     let expanded = match expand::expand(&model) {
         Ok(x) => x,
         Err(errors) => return Err(fail(loaded.sources, errors)),
@@ -116,6 +122,7 @@ pub fn check(
         model,
         expanded,
         shape,
+        warnings,
     })
 }
 

@@ -11,10 +11,20 @@
 //! asked about). Each distinct question is asked
 //! once and reported once. Jitter is not sampled: the nominal positions
 //! are checked.
+//!
+//! Then what the products standing in the cell block (every product of
+//! an inventory stands at its entry when a package starts): a start pose
+//! none of whose branches clears them is an [`Error::StartBlocked`] (every
+//! package would fail at its first motion); a pick the empty cell allows
+//! and the inventory's other products block is a
+//! [`Warning::PickBlocked`], since whether they still stand depends on
+//! the order packed (each of them anywhere the blocks' `jitter` may put
+//! it: its footprint widened by the largest).
 
 use crate::error::Error;
 use crate::model::{Choose, Inventory, Model, Placed};
 use crate::source::Loc;
+use crate::warning::Warning;
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
@@ -110,6 +120,27 @@ pub struct Unreached {
     pub tip: [f64; 3],
 }
 
+/// A product standing in the cell when a package starts: an inventory
+/// entry's product (an index into `Model::products`) at its place.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Standing {
+    pub product: usize,
+    pub at: [f64; 2],
+    /// How far (m, along x and along y) it may stand from `at` (the
+    /// largest `jitter` of the blocks that generate from its inventory):
+    /// its footprint is widened by it on every side.
+    pub margin: f64,
+}
+
+/// A pose the empty cell allows and standing products block: which pose,
+/// and the product met (an index into the `standing` asked about), where
+/// the robot can tell.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Blocked {
+    pub pose: Pose,
+    pub by: Option<usize>,
+}
+
 /// The robot's answers. Implementations must be deterministic.
 pub trait Workspace {
     /// The start pose of cell `cell`, if it cannot be reached.
@@ -131,6 +162,28 @@ pub trait Workspace {
         at: [f64; 2],
         slot: usize,
     ) -> Option<Unreached>;
+
+    /// The start pose of cell `cell` (which the empty cell reaches) with
+    /// `standing` products where they stand: the one every branch of it
+    /// meets (an index into `standing`), if one is. Without an answer
+    /// (the default), nothing is blocked.
+    fn start_among(&self, _m: &Model, _cell: usize, _standing: &[Standing]) -> Option<usize> {
+        None
+    }
+
+    /// Picking `product` at `at` (which the empty cell allows) with the
+    /// `standing` products (not it) where they stand: the first pose they
+    /// block, if any. Without an answer (the default), nothing is blocked.
+    fn pick_among(
+        &self,
+        _m: &Model,
+        _cell: usize,
+        _product: usize,
+        _at: [f64; 2],
+        _standing: &[Standing],
+    ) -> Option<Blocked> {
+        None
+    }
 }
 
 /// A workspace that reaches everything: for tools that have no robot model
@@ -240,8 +293,10 @@ impl Asker<'_> {
 }
 
 /// Every pose the model's orders, demonstrations and scenarios need,
-/// asked of `ws`; one error per unreachable question.
-pub fn check(m: &Model, ws: &dyn Workspace) -> Vec<Error> {
+/// asked of `ws`: one error per unreachable question; then what the
+/// products standing in each cell block (errors for a start, warnings for
+/// a pick).
+pub fn check(m: &Model, ws: &dyn Workspace) -> (Vec<Error>, Vec<Warning>) {
     let mut a = Asker {
         m,
         ws,
@@ -249,6 +304,8 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> Vec<Error> {
         placed: BTreeSet::new(),
         errors: Vec::new(),
     };
+    // The cells whose start the empty cell reaches.
+    let mut started = BTreeSet::new();
     for (i, cell) in m.cells.iter().enumerate() {
         if let Some(u) = ws.start(m, i) {
             a.errors.push(Error::Unreachable {
@@ -259,6 +316,8 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> Vec<Error> {
                 pose: u.pose,
                 tip: u.tip,
             });
+        } else {
+            started.insert(i);
         }
     }
     for order in &m.orders {
@@ -282,5 +341,101 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> Vec<Error> {
     for s in &m.scenario_sets {
         a.choose(&m.inventories[s.inventory], &s.choose);
     }
-    a.errors
+    let mut warnings = Vec::new();
+    for i in 0..m.inventories.len() {
+        let cell = m.inventories[i].cell;
+        standing(
+            m,
+            ws,
+            i,
+            started.contains(&cell),
+            &a.picked,
+            &mut a.errors,
+            &mut warnings,
+        );
+    }
+    (a.errors, warnings)
+}
+
+/// What inventory `i`'s products, standing at their entries, block: its
+/// cell's start (if the empty cell has one: `started`), and each pick the
+/// empty cell allows (`picked`: asked and reached).
+fn standing(
+    m: &Model,
+    ws: &dyn Workspace,
+    i: usize,
+    started: bool,
+    picked: &BTreeMap<Place, bool>,
+    errors: &mut Vec<Error>,
+    warnings: &mut Vec<Warning>,
+) {
+    let inv = &m.inventories[i];
+    let at_start: Vec<Standing> = inv
+        .entries
+        .iter()
+        .map(|e| Standing {
+            product: e.product,
+            at: e.at,
+            margin: 0.0,
+        })
+        .collect();
+    // The most any block that generates from this inventory moves a
+    // product (each axis).
+    let jitter = m
+        .demo_sets
+        .iter()
+        .filter(|d| d.inventory == i)
+        .map(|d| d.jitter)
+        .chain(
+            m.scenario_sets
+                .iter()
+                .filter(|s| s.inventory == i)
+                .map(|s| s.jitter),
+        )
+        .fold(0.0, f64::max);
+    let all: Vec<Standing> = at_start
+        .iter()
+        .map(|s| Standing {
+            margin: jitter,
+            ..*s
+        })
+        .collect();
+    let name = |j: usize| m.products[inv.entries[j].product].name.clone();
+    if started
+        && let Some(j) = ws
+            .start_among(m, inv.cell, &at_start)
+            .filter(|&j| j < at_start.len())
+    {
+        errors.push(Error::StartBlocked {
+            at: inv.entries[j].loc,
+            cell: m.cells[inv.cell].name.clone(),
+            inventory: inv.name.clone(),
+            by: name(j),
+        });
+    }
+    for (k, e) in inv.entries.iter().enumerate() {
+        if picked.get(&(inv.cell, e.product, e.at.map(f64::to_bits))) != Some(&true) {
+            continue;
+        }
+        // The others, with their entries' indices.
+        let (others, index): (Vec<Standing>, Vec<usize>) = all
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != k)
+            .map(|(j, s)| (*s, j))
+            .unzip();
+        if let Some(b) = ws.pick_among(m, inv.cell, e.product, e.at, &others) {
+            let by = b.by.and_then(|b| index.get(b)).map(|&j| {
+                let other = &inv.entries[j];
+                (name(j), other.at, other.loc)
+            });
+            warnings.push(Warning::PickBlocked {
+                at: e.loc,
+                product: name(k),
+                position: e.at,
+                pose: b.pose,
+                by,
+            });
+        }
+    }
 }

@@ -1,6 +1,8 @@
 //! The compiler's documented semantics, on in-memory files.
 
-use packwright_compiler::{Anywhere, Compiled, Error, MemoryLoader, check};
+use packwright_compiler::model::Model;
+use packwright_compiler::workspace::{Blocked, Pose, Standing, Unreached};
+use packwright_compiler::{Anywhere, Compiled, Error, MemoryLoader, Warning, check};
 use std::path::PathBuf;
 
 const CELL: &str = "
@@ -359,5 +361,108 @@ fn streamed_artifacts_equal_the_dataset_built_in_memory() {
         assert_eq!((r.first_sample, r.samples), g.per_demo[i]);
         assert_eq!(r.missing.len(), d.setup.missing.len());
         assert_eq!(r.sequence.len(), d.sequence.len());
+    }
+}
+
+/// A workspace where the standing products block: the start meets `D`;
+/// picking `A` meets `B` while it stands. Records each pick asked among
+/// standing products, with the margins it was given.
+struct Crowded {
+    asked: std::cell::RefCell<Vec<(String, Vec<f64>)>>,
+}
+
+impl packwright_compiler::Workspace for Crowded {
+    fn start(&self, _: &Model, _: usize) -> Option<Unreached> {
+        None
+    }
+    fn pick(&self, _: &Model, _: usize, _: usize, _: [f64; 2]) -> Option<Unreached> {
+        None
+    }
+    fn place(&self, _: &Model, _: usize, _: usize, _: [f64; 2], _: usize) -> Option<Unreached> {
+        None
+    }
+    fn start_among(&self, m: &Model, _: usize, standing: &[Standing]) -> Option<usize> {
+        standing
+            .iter()
+            .position(|s| m.products[s.product].name == "D")
+    }
+    fn pick_among(
+        &self,
+        m: &Model,
+        _: usize,
+        product: usize,
+        _: [f64; 2],
+        standing: &[Standing],
+    ) -> Option<Blocked> {
+        let name = &m.products[product].name;
+        self.asked
+            .borrow_mut()
+            .push((name.clone(), standing.iter().map(|s| s.margin).collect()));
+        let b = standing
+            .iter()
+            .position(|s| m.products[s.product].name == "B")?;
+        (name == "A").then_some(Blocked {
+            pose: Pose::TopFace,
+            by: Some(b),
+        })
+    }
+}
+
+fn crowded(extra: &str) -> Result<Compiled, Vec<Error>> {
+    let loader = MemoryLoader::new().with("main.pack", format!("{CELL}\n{extra}"));
+    let ws = Crowded {
+        asked: Default::default(),
+    };
+    check(&loader, &[PathBuf::from("main.pack")], &ws).map_err(|f| f.errors)
+}
+
+/// What standing products block: a start every branch of which meets one
+/// is an error at that product's entry; a pick they block is a warning at
+/// the picked product's entry naming the one met; only picks something
+/// asks for are asked about, each among the others of its inventory,
+/// widened by the largest `jitter` of the blocks on that inventory.
+#[test]
+fn standing_products_block_the_start_as_an_error_and_a_pick_as_a_warning() {
+    let errors = crowded("order o for stock5 {\n A -> g1\n}\n").expect_err("the start is blocked");
+    assert_eq!(errors.len(), 1, "{errors:#?}");
+    let Error::StartBlocked { by, at, .. } = &errors[0] else {
+        panic!("{errors:#?}")
+    };
+    assert_eq!(by, "D");
+    // D's entry: the fourth line of the inventory.
+    let d = CELL.find("  D (0.56").expect("D's entry") + 2;
+    assert_eq!(at.span.start as usize, d);
+
+    let no_d = CELL.replace("  D (0.56, -0.38)\n", "");
+    let loader = MemoryLoader::new().with(
+        "main.pack",
+        format!(
+            "{no_d}\norder o for stock5 {{\n A -> g1\n B -> g2\n}}\n\
+             scenarios s for stock5 {{\n choose 1 of A, B into g1, g2\n jitter 5 mm\n count 4\n}}\n\
+             demos t for stock5 {{\n choose 1 of A, B into g1, g2\n jitter 8 mm\n}}\n"
+        ),
+    );
+    let ws = Crowded {
+        asked: Default::default(),
+    };
+    let c = match check(&loader, &[PathBuf::from("main.pack")], &ws) {
+        Ok(c) => c,
+        Err(f) => panic!("{:#?}", f.errors),
+    };
+    assert_eq!(c.warnings.len(), 1, "{:#?}", c.warnings);
+    let Warning::PickBlocked {
+        product, by, pose, ..
+    } = &c.warnings[0];
+    assert_eq!((product.as_str(), *pose), ("A", Pose::TopFace));
+    assert_eq!(by.as_ref().map(|b| b.0.as_str()), Some("B"));
+    let asked = ws.asked.into_inner();
+    let names: Vec<&str> = asked.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["A", "B"], "C and E are packed by nothing");
+    for (_, margins) in &asked {
+        assert_eq!(margins.len(), 3, "the other three of the four entries");
+        assert!(
+            margins.iter().all(|m| (m - 0.008).abs() < 1e-12),
+            "{margins:?}"
+        );
     }
 }

@@ -9,8 +9,9 @@ use crate::episode::{arm_of, scene_of};
 use packwright_compiler::Workspace;
 use packwright_compiler::emit::cell_record;
 use packwright_compiler::model::Model;
-use packwright_compiler::workspace::{Pose, Unreached};
+use packwright_compiler::workspace::{Blocked, Pose, Standing, Unreached};
 use packwright_interface::outcome::Stage;
+use packwright_motion::collision::ProductBody;
 use packwright_motion::execute::{self, Reachability};
 use std::cell::RefCell;
 use std::collections::BTreeMap;
@@ -37,6 +38,31 @@ impl RobotWorkspace {
         });
         reach.as_ref().map(f)
     }
+}
+
+/// The standing products as the checker's bodies, named as the model
+/// names them (on the table, square).
+fn bodies(m: &Model, standing: &[Standing]) -> Vec<ProductBody> {
+    standing
+        .iter()
+        .filter_map(|s| {
+            let p = m.products.get(s.product)?;
+            let wide = 2.0 * s.margin.max(0.0);
+            Some(ProductBody {
+                name: p.name.clone(),
+                centre: [s.at[0], s.at[1], p.size[2] / 2.0],
+                size: [p.size[0] + wide, p.size[1] + wide, p.size[2]],
+                yaw: 0.0,
+            })
+        })
+        .collect()
+}
+
+/// Which of `standing` is named `name`.
+fn index_of(m: &Model, standing: &[Standing], name: &str) -> Option<usize> {
+    standing
+        .iter()
+        .position(|s| m.products.get(s.product).is_some_and(|p| p.name == name))
 }
 
 fn pose(u: execute::Unreached) -> Unreached {
@@ -79,5 +105,36 @@ impl Workspace for RobotWorkspace {
         let size = m.products.get(product)?.size;
         self.ask(m, cell, |r| r.placing(size, at, slot).err().map(pose))
             .flatten()
+    }
+
+    fn start_among(&self, m: &Model, cell: usize, standing: &[Standing]) -> Option<usize> {
+        let among = bodies(m, standing);
+        self.ask(m, cell, |r| r.among(&among).start_blocked_by())
+            .flatten()
+            .and_then(|name| index_of(m, standing, &name))
+    }
+
+    fn pick_among(
+        &self,
+        m: &Model,
+        cell: usize,
+        product: usize,
+        at: [f64; 2],
+        standing: &[Standing],
+    ) -> Option<Blocked> {
+        let size = m.products.get(product)?.size;
+        let among = bodies(m, standing);
+        self.ask(m, cell, |r| {
+            let r = r.among(&among);
+            let u = r.picking(size, at).err()?;
+            let by = r
+                .blocked_by(u.tip)
+                .and_then(|name| index_of(m, standing, &name));
+            Some(Blocked {
+                pose: pose(u).pose,
+                by,
+            })
+        })
+        .flatten()
     }
 }

@@ -1,6 +1,6 @@
 //! `packwright check`: diagnostics only.
 
-use super::{report_failure, summary_line};
+use super::{report_failure, report_warnings, summary_line};
 use crate::Exit;
 use crate::cli::CheckArgs;
 use crate::fsio::FsLoader;
@@ -9,10 +9,11 @@ use packwright_pipeline::reach::RobotWorkspace;
 pub fn run(args: &CheckArgs) -> anyhow::Result<Exit> {
     match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new()) {
         Ok(compiled) => {
+            report_warnings(&compiled.sources, &compiled.warnings, args.json);
             if args.json {
                 outln!(
                     "{}",
-                    serde_json::json!({"type": "summary", "errors": 0, "files": compiled.sources.files().count()})
+                    serde_json::json!({"type": "summary", "errors": 0, "warnings": compiled.warnings.len(), "files": compiled.sources.files().count()})
                 );
             } else {
                 errln!("ok: {}", summary_line(&compiled));

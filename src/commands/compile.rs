@@ -12,6 +12,9 @@ pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
         Ok(ok) => ok,
         Err(failed) => return Ok(report_failure(&failed, args.json)),
     };
+    if !args.json {
+        super::report_warnings(&compiled.sources, &compiled.warnings, false);
+    }
     // Checked before anything is written; then the artifacts are streamed
     // into a temporary sibling of the output, swapped in when complete.
     let out = AtomicDir::begin(&args.output, packwright_compiler::file::MANIFEST)?;
@@ -46,6 +49,7 @@ pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
                 "samples": compiled.shape.samples,
                 "nodes": compiled.shape.width,
                 "scenarios": compiled.expanded.suites.iter().map(|s| s.cases.len()).sum::<usize>(),
+                "warnings": compiled.warnings.iter().map(|w| packwright_compiler::diagnostic::warning_to_json(&compiled.sources, w)).collect::<Vec<_>>(),
             })
         );
     } else {

@@ -44,7 +44,9 @@ pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
     // Geometry and reach are drawn, not refused: the picture shows them.
     let mut diagnostics = validate::validate(&model);
     if diagnostics.is_empty() {
-        diagnostics = workspace::check(&model, &RobotWorkspace::new());
+        let warnings;
+        (diagnostics, warnings) = workspace::check(&model, &RobotWorkspace::new());
+        super::report_warnings(&loaded.sources, &warnings, false);
     }
     let subject = if let Some(name) = &args.scenario {
         if !diagnostics.is_empty() {

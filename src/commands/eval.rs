@@ -56,6 +56,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
         Ok(c) => c,
         Err(failed) => return Ok(super::report_failure(&failed, args.json)),
     };
+    super::report_warnings(&compiled.sources, &compiled.warnings, false);
     let suites: Vec<_> = compiled
         .expanded
         .suites

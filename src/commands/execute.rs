@@ -70,6 +70,7 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
         Ok(c) => c,
         Err(failed) => return Ok(super::report_failure(&failed, false)),
     };
+    super::report_warnings(&compiled.sources, &compiled.warnings, false);
     let (name, setup) = find_setup(&compiled, args.order.as_deref(), args.scenario.as_deref())?;
     let ep = episode(&compiled.model, &setup)?;
     // A bad robot address is bad input, found before anything else.

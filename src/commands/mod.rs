@@ -13,7 +13,7 @@ pub mod show;
 pub mod train;
 
 use crate::Exit;
-use packwright_compiler::{Compiled, Failed, diagnostic};
+use packwright_compiler::{Compiled, Failed, SourceMap, Warning, diagnostic};
 
 /// Prints a failed compilation's diagnostics (text on stderr, or JSON Lines
 /// on stdout) and picks the exit code.
@@ -40,6 +40,23 @@ pub fn report_failure(failed: &Failed, json: bool) -> Exit {
         Exit::Failure
     } else {
         Exit::Diagnostics
+    }
+}
+
+/// Prints a compilation's warnings: text on stderr, or (`json`) JSON
+/// Lines on stdout, `"type": "diagnostic"` with `"severity": "warning"`.
+pub fn report_warnings(sources: &SourceMap, warnings: &[Warning], json: bool) {
+    for w in warnings {
+        if json {
+            let mut value =
+                serde_json::to_value(diagnostic::warning_to_json(sources, w)).unwrap_or_default();
+            if let Some(obj) = value.as_object_mut() {
+                obj.insert("type".into(), "diagnostic".into());
+            }
+            outln!("{value}");
+        } else {
+            errln!("{}", diagnostic::render_warning(sources, w));
+        }
     }
 }
 

@@ -5,16 +5,19 @@
 //! ([`Station::solve`](super::station::Station::solve)) as `execute`, and
 //! the straight moves between them (the descent to the top face, the lift
 //! carrying the product, lowered where it must be, the descent into the
-//! slot). What it does not know: other products
-//! standing in the cell, and the carrying motions (lift to approach to
-//! above the slot: a swing or a search); `execute` reports those.
+//! slot). What it does not know: the carrying motions (lift to approach
+//! to above the slot: a swing or a search); `execute` reports those. The
+//! products standing in the cell are not obstacles unless given
+//! ([`Reachability::among`]: then the same questions tell what they block,
+//! a start pose or a pick the empty cell allows).
 
 use super::station::{Load, MAX_RAISES, MIN_LIFT, RAISE_STEP, READY, home_on, home_tip, solutions};
-use crate::collision::{Checker, Held};
+use crate::collision::{Checker, Held, ProductBody};
 use crate::expert::{self, SubGoal};
 use nalgebra::{Point3, Vector3};
-use packwright_interface::outcome::Stage;
+use packwright_interface::outcome::{Hit, Stage};
 use packwright_interface::scene::CellScene;
+use packwright_interface::world::Body;
 use packwright_kinematics::{Arm, Joints};
 
 /// The most any joint may turn on a straight descent or lift between two
@@ -33,6 +36,7 @@ pub struct Unreached {
 }
 
 /// The reach of one arm in one cell.
+#[derive(Clone)]
 pub struct Reachability {
     checker: Checker,
     cell: CellScene,
@@ -53,6 +57,37 @@ impl Reachability {
             start,
             near: start.unwrap_or(READY),
         }
+    }
+
+    /// The same reach with `standing` products where they stand (the
+    /// start pose chosen clear of them where a branch is, as `execute`
+    /// chooses it).
+    pub fn among(&self, standing: &[ProductBody]) -> Reachability {
+        let mut checker = self.checker.clone();
+        checker.set_products(standing);
+        let start = home_on(&self.checker, &self.cell, standing);
+        Reachability {
+            checker,
+            cell: self.cell.clone(),
+            start,
+            near: start.unwrap_or(READY),
+        }
+    }
+
+    /// The standing product the start pose meets, if it meets one (no
+    /// free branch of it is clear of them all).
+    pub fn start_blocked_by(&self) -> Option<String> {
+        let start = self.start?;
+        product_hit(self.checker.check(&start, None, None))
+    }
+
+    /// The standing product that the nearest solution of `tip` (cup
+    /// down) meets, of those clear of the fixtures: what blocks a pose
+    /// [`picking`](Self::picking) found unreached among standing products.
+    pub fn blocked_by(&self, tip: [f64; 3]) -> Option<String> {
+        solutions(&self.checker, Point3::from(tip), 0.0, &self.near)
+            .iter()
+            .find_map(|q| product_hit(self.checker.check(q, None, None)))
     }
 
     /// The start pose, or where its cup tip would be ([`home`]: over the
@@ -180,5 +215,16 @@ impl Reachability {
             above = reached;
         }
         Ok(())
+    }
+}
+
+/// The standing product a hit names, if it names one.
+fn product_hit(hit: Option<Hit>) -> Option<String> {
+    match hit? {
+        Hit::Bodies {
+            b: Body::Product(name),
+            ..
+        } => Some(name),
+        _ => None,
     }
 }

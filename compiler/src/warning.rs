@@ -1,0 +1,104 @@
+//! What the compiler warns about: input that compiles and may still fail
+//! on the robot, depending on what happens first (for example which
+//! products are still standing). Each variant knows its stable code, its
+//! caret label, its notes and its fix, as [`Error`](crate::Error) does;
+//! rendering lives in `diagnostic`.
+
+use crate::source::Loc;
+use crate::workspace::Pose;
+use std::fmt;
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Warning {
+    /// A product the robot picks in an empty cell, but not while another
+    /// product of its inventory stands where it stands.
+    PickBlocked {
+        /// The picked product's inventory entry.
+        at: Loc,
+        product: String,
+        position: [f64; 2],
+        /// The first pose of the pick that the standing products block.
+        pose: Pose,
+        /// The product met (by the nearest arm pose that meets one), with
+        /// its place and its entry.
+        by: Option<(String, [f64; 2], Loc)>,
+    },
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Warning::PickBlocked {
+                product,
+                position,
+                pose,
+                by,
+                ..
+            } => {
+                write!(
+                    f,
+                    "the robot cannot reach {pose} when it picks product `{product}` at ({:.3}, {:.3}) ",
+                    position[0], position[1]
+                )?;
+                match by {
+                    Some((other, at, _)) => {
+                        write!(f, "while `{other}` stands at ({:.3}, {:.3})", at[0], at[1])
+                    }
+                    None => f.write_str("while the other products of its inventory stand"),
+                }
+            }
+        }
+    }
+}
+
+impl Warning {
+    /// Stable code, for documentation and tools.
+    pub fn code(&self) -> &'static str {
+        match self {
+            Warning::PickBlocked { .. } => "W001",
+        }
+    }
+
+    /// Where the caret goes.
+    pub fn at(&self) -> Loc {
+        match self {
+            Warning::PickBlocked { at, .. } => *at,
+        }
+    }
+
+    /// The short text under the caret.
+    pub fn label(&self) -> String {
+        match self {
+            Warning::PickBlocked { .. } => {
+                "every arm pose that reaches it meets a product beside it".into()
+            }
+        }
+    }
+
+    /// Secondary places: (where, what it is).
+    pub fn notes(&self) -> Vec<(Loc, String)> {
+        match self {
+            Warning::PickBlocked {
+                by: Some((other, _, at)),
+                ..
+            } => vec![(*at, format!("`{other}` stands here"))],
+            Warning::PickBlocked { .. } => Vec::new(),
+        }
+    }
+
+    /// How to fix it.
+    pub fn help(&self) -> String {
+        match self {
+            Warning::PickBlocked {
+                product,
+                by: Some((other, ..)),
+                ..
+            } => format!(
+                "a package packs `{product}` only once `{other}` is gone: put `{other}` before it in the order's sequence, or move the two further apart"
+            ),
+            Warning::PickBlocked { product, .. } => format!(
+                "a package packs `{product}` only once the products beside it are gone: pack those first, or give it more room"
+            ),
+        }
+    }
+}
