@@ -5,7 +5,7 @@
 //! set of weights serves cells it was not taught (README, "Learning"):
 //!
 //! - a **node** (a product) is (selected, place along the taught chain,
-//!   distance from its goal, raised over the table or not), never its
+//!   in its slot or not, raised over the table or not), never its
 //!   position;
 //! - a **slot** is where it lies relative to the held product's goal, so
 //!   the placing decision points at a slot by its geometry: any slot of any
@@ -30,10 +30,20 @@ use packwright_interface::{Graph, Stage, SubGoalQuery};
 pub const ACTION_SCALE: f32 = packwright_interface::record::MAX_ACTION as f32;
 
 /// Inputs per node: selected (0/1), place along the chain (0 for the first
-/// product seen to 1 for the last), distance from its goal (decimetres,
-/// at most 3), and whether it is raised: the height of its bottom over
-/// the table in units of [`RAISED`], at most 1.
+/// product seen to 1 for the last), whether it is in its slot: its
+/// distance from its goal in units of [`PACKED`], at most 1, and whether
+/// it is raised: the height of its bottom over the table in units of
+/// [`RAISED`], at most 1.
 pub const NODE_FEATURES: usize = 4;
+/// A selected product this far (m) from its goal or farther reads as not
+/// packed. Products wait outside the box, so a product not yet packed is
+/// always more than a product's width from its slot; a packed one is
+/// within millimetres of it. In decimetres up to 3, as it was, the
+/// reasoner learned "packed" from the distances of the cells it was
+/// taught (products waiting 0.3 m or more from their slots) and, in a
+/// compact cell with products waiting 12 cm from their slots, read them
+/// as packed and chose the box with nothing in the cup.
+pub const PACKED: f32 = 0.05;
 /// A product whose bottom is this high (m) over the table reads as raised
 /// (held): products stand on the table or on a box's floor, which is at
 /// table height, and a held one is carried the cell's `lift` up, at
@@ -149,7 +159,7 @@ pub fn node_rows(graph: &Graph) -> Vec<[f32; NODE_FEATURES]> {
             [
                 if n.selected { 1.0 } else { 0.0 },
                 i as f32 / last,
-                (10.0 * away).clamp(0.0, 3.0),
+                (away / PACKED).clamp(0.0, 1.0),
                 (bottom / RAISED).clamp(0.0, 1.0),
             ]
         })
@@ -319,6 +329,31 @@ pub fn one_hot(out: &mut Vec<f32>, k: usize, n: usize) {
 mod tests {
     use super::*;
     use packwright_interface::Node;
+
+    /// Whether a product is packed reads the same in any cell: one
+    /// waiting 12 cm from its slot (a compact cell, the products beside
+    /// the box) reads exactly as one waiting a metre away, and a packed
+    /// one a few millimetres off its goal reads nearly as one on it.
+    #[test]
+    fn a_node_reads_packed_or_not_whatever_the_cells_distances() {
+        let node = |x: f32| Node {
+            centre: [x, 0.0, 0.03],
+            height: 0.06,
+            selected: true,
+            goal: [0.0, 0.0, 0.03],
+        };
+        let rows = node_rows(&Graph {
+            nodes: vec![node(1.0), node(0.12), node(0.003), node(0.0)],
+            slots: Vec::new(),
+            held_goal: [0.0; 3],
+        });
+        let packed: Vec<f32> = rows.iter().map(|r| r[2]).collect();
+        assert_eq!(packed[0], 1.0);
+        assert_eq!(packed[1], packed[0], "{packed:?}");
+        assert!(packed[2] < 0.1 && packed[3] == 0.0, "{packed:?}");
+        // Standing on the table: not raised.
+        assert!(rows.iter().all(|r| r[3] == 0.0));
+    }
 
     #[test]
     fn sub_goal_outputs_round_trip() {
