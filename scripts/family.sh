@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Learn and measure on a family of random cells (`packwright generate`):
-# for each seed, generate gen_SEED.pack (wide_SEED.pack with FAMILY=wide),
+# for each seed, generate gen_SEED.pack (wide_SEED.pack with FAMILY=wide,
+# compact_SEED.pack with FAMILY=compact),
 # compile it, train a model on its sparse demonstrations and evaluate its
 # six suites (CASE 1 with n, n+1 and n+2 products, CASE 2, missing stock,
 # untaught slots) with the baselines, then print one row per suite and
@@ -13,14 +14,16 @@
 #   PACKWRIGHT  the binary (default: target/release/packwright)
 #   WORK        where the files go (default: a new directory under /tmp);
 #               per seed: gen_SEED.pack, gen_SEED.out/, gen_SEED.model/,
-#               gen_SEED.eval.json (wide_SEED... with FAMILY=wide)
+#               gen_SEED.eval.json (wide_SEED... or compact_SEED... with
+#               FAMILY=wide or compact)
 #   TRAIN_ARGS  extra arguments for `packwright train` (e.g. "--epochs 50")
 #   EVAL_ARGS   arguments for `packwright eval` (default: --baselines, the
 #               expert and RRT-Connect beside the learned planner; set it
 #               empty for the learned planner alone, three times faster)
 #   FAMILY      the cells: standard (default; gen_SEED, the reported
-#               family) or wide (wide_SEED: deep boxes, tall products,
-#               short lifts; `packwright generate --help`)
+#               family), wide (wide_SEED: deep boxes, tall products,
+#               short lifts) or compact (compact_SEED: the products
+#               beside the box); `packwright generate --help`
 
 set -euo pipefail
 
@@ -46,7 +49,8 @@ family=${FAMILY:-standard}
 case $family in
   standard) prefix=gen ;;
   wide) prefix=wide ;;
-  *) echo "family.sh: FAMILY must be standard or wide, not $family" >&2; exit 2 ;;
+  compact) prefix=compact ;;
+  *) echo "family.sh: FAMILY must be standard, wide or compact, not $family" >&2; exit 2 ;;
 esac
 
 for seed in "${seeds[@]}"; do

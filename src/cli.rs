@@ -472,8 +472,10 @@ pub struct GenerateArgs {
     /// recipe with what a line engineer's cell may have and ours rarely
     /// does: boxes to 300 mm deep, products to 150 mm tall, lifts from 20
     /// mm, cups 50-200 mm, risers to 400 mm, half of the cells slowed with
-    /// `speed` (wide_SEED.pack). Develop on wide cells to find what the
-    /// standard ones hide.
+    /// `speed` (wide_SEED.pack); `compact` the standard sizes with the
+    /// products waiting beside the box, on the same side of the robot
+    /// (compact_SEED.pack). Develop on wide and compact cells to find what
+    /// the standard ones hide.
     #[arg(long, value_enum, value_name = "FAMILY", default_value_t = CellFamily::Standard)]
     pub family: CellFamily,
 }
@@ -485,6 +487,8 @@ pub enum CellFamily {
     Standard,
     /// Deep boxes, tall products, short lifts, long cups, high risers.
     Wide,
+    /// Standard sizes; the products wait beside the box.
+    Compact,
 }
 
 /// A sequence rule `generate` can teach (`--sequence`).

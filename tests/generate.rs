@@ -335,6 +335,63 @@ fn the_wide_family_reaches_beyond_the_standard_ranges_and_compiles_as_cleanly() 
     assert!(check(&loader, &files, &RobotWorkspace::new()).is_ok());
 }
 
+/// The compact family: the standard sizes (the same ranges), the products
+/// on the box's side of the robot, clear of the box, the nearest of them
+/// 11-22 cm from a slot (every standard cell keeps them farther); every
+/// cell compiles cleanly and canonically, with the robot's reach, and
+/// beside a standard cell of the same seed.
+#[test]
+fn the_compact_family_puts_the_products_beside_the_box_and_compiles_as_cleanly() {
+    let mut sides = BTreeSet::new();
+    for seed in SEEDS {
+        let g = generated_cell(Family::Compact, seed, None);
+        assert_eq!(g, generated_cell(Family::Compact, seed, None));
+        assert_eq!(g.file_name(), format!("compact_{seed}.pack"));
+        assert_eq!(g.pending_side, g.box_side, "compact seed {seed}");
+        sides.insert(g.box_side.as_str());
+        assert_eq!(
+            packwright_grammar::format(&g.text).expect("parses"),
+            g.text,
+            "compact seed {seed}: not laid out canonically"
+        );
+        let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
+        let c = match check(
+            &loader,
+            &[PathBuf::from(g.file_name())],
+            &RobotWorkspace::new(),
+        ) {
+            Ok(c) => c,
+            Err(f) => panic!("compact seed {seed}:\n{}", f.render()),
+        };
+        assert!(
+            c.warnings.is_empty(),
+            "compact seed {seed}: {:?}",
+            c.warnings
+        );
+        let e = extent(&c);
+        assert!((60.0..=100.0).contains(&e.box_depth), "seed {seed}");
+        assert!(e.tallest <= 60.0 && e.widest <= 60.0, "seed {seed}");
+        let cell = &c.model.cells[0];
+        let nearest = c.model.inventories[0]
+            .entries
+            .iter()
+            .flat_map(|p| {
+                cell.slots
+                    .iter()
+                    .map(move |s| (p.at[0] - s.at[0]).hypot(p.at[1] - s.at[1]))
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!((0.11..=0.22).contains(&nearest), "seed {seed}: {nearest}");
+    }
+    assert_eq!(sides.len(), 4, "every side: {sides:?}");
+    let both = [family_cell(3), generated_cell(Family::Compact, 3, None)];
+    let loader = both.iter().fold(MemoryLoader::new(), |l, g| {
+        l.with(g.file_name(), g.text.clone())
+    });
+    let files: Vec<PathBuf> = both.iter().map(|g| PathBuf::from(g.file_name())).collect();
+    assert!(check(&loader, &files, &RobotWorkspace::new()).is_ok());
+}
+
 /// FNV-1a, 64 bits: a hash that is the same on every platform and Rust
 /// release.
 fn fnv1a(bytes: &[u8]) -> u64 {
@@ -417,6 +474,15 @@ fn the_command_writes_one_file_per_seed() {
     assert_eq!(
         fs::read_to_string(&path).expect("written"),
         generated_cell(Family::Wide, 5, None).text
+    );
+    fs::remove_file(&path).expect("remove");
+    // The compact family.
+    let compact = packwright(&["generate", "--family", "compact", "--seed", "5", "-o", &out]);
+    assert_eq!(compact.status.code(), Some(0));
+    let path = dir.join("compact_5.pack");
+    assert_eq!(
+        fs::read_to_string(&path).expect("written"),
+        generated_cell(Family::Compact, 5, None).text
     );
     fs::remove_file(&path).expect("remove");
     // Bad usage exits 2.

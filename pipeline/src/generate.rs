@@ -9,13 +9,16 @@
 //! six `scenarios` suites that measure what the demonstrations did not
 //! show: larger orders, CASE 2, missing stock and the untaught slots.
 //!
-//! Two families share that recipe ([`Family`]): the standard cells
+//! Three families share that recipe ([`Family`]): the standard cells
 //! (`gen_<seed>`, [`family_cell`]), which the bundled model was taught on
-//! and the reported figures come from, and the wide cells (`wide_<seed>`)
+//! and the reported figures come from; the wide cells (`wide_<seed>`)
 //! with the sizes a line engineer's cell may have and ours rarely do:
 //! deep boxes, tall products, short lifts, long or short cups, high
-//! risers, a slowed arm. A wide seed draws in the same order as a
-//! standard one, from wider ranges, so adding the family changed no
+//! risers, a slowed arm; and the compact cells (`compact_<seed>`), the
+//! standard sizes with the products waiting beside the box, on the same
+//! side of the robot. A wide seed draws in the same order as a standard
+//! one, from wider ranges, and a compact one differs only where it draws
+//! the products' side and place, so adding the families changed no
 //! standard cell.
 //!
 //! Pure and deterministic: every draw comes from one
@@ -74,6 +77,11 @@ pub enum Family {
     /// side, so that they stand), lifts from 20 mm, cups 50-200 mm, risers
     /// to 400 mm, about half of them slowed (`speed`).
     Wide,
+    /// The standard sizes with the products waiting beside the box, on
+    /// the same side of the robot (`compact_<seed>`): the pending area
+    /// 3-8 cm clear of it, the nearest product 11-22 cm from a slot, where
+    /// the other families keep the products a whole side away.
+    Compact,
 }
 
 impl Family {
@@ -81,6 +89,7 @@ impl Family {
         match self {
             Family::Standard => "standard",
             Family::Wide => "wide",
+            Family::Compact => "compact",
         }
     }
 
@@ -89,6 +98,7 @@ impl Family {
         match self {
             Family::Standard => "gen",
             Family::Wide => "wide",
+            Family::Compact => "compact",
         }
     }
 
@@ -98,12 +108,13 @@ impl Family {
         match self {
             Family::Standard => "",
             Family::Wide => " --family wide",
+            Family::Compact => " --family compact",
         }
     }
 
     fn ranges(self) -> Ranges {
         match self {
-            Family::Standard => Ranges {
+            Family::Standard | Family::Compact => Ranges {
                 cube: (30, 60),
                 across: (30, 60),
                 tall: (25, 60),
@@ -528,13 +539,16 @@ fn grids(items: usize, max_rows: usize, max_cols: usize) -> Vec<(usize, usize)> 
         .collect()
 }
 
-/// Draws the box with its slots and the pending area with the products;
+/// Draws the box with its slots and the pending area with the products
+/// (`beside` the box, on its side of the robot, else on `pending_side`);
 /// `None` when the draw breaks a rule (the caller draws again).
+#[allow(clippy::too_many_arguments)]
 fn draw_layout(
     rng: &mut ChaCha8Rng,
     base: [i64; 2],
     box_side: Side,
     pending_side: Side,
+    beside: bool,
     products: &[Product],
     slot_count: usize,
     depth: (i64, i64),
@@ -597,8 +611,20 @@ fn draw_layout(
         REACH_MAX_MM
     };
     let p0 = stepped(rng, 420, if opposite { 470 } else { 520 }, 10);
-    let pt0 = stepped(rng, -50, 50, 10);
+    let mut pt0 = stepped(rng, -50, 50, 10);
     let edge = half + JITTER_MM + stepped(rng, 10, 30, 5);
+    if beside {
+        // Beside the box along the tangent, 30-80 mm clear of it, on
+        // either hand.
+        let clear = stepped(rng, 30, 80, 5);
+        let span = (pcols as i64 - 1) * ppitch / 2 + edge;
+        let off = half_t + clear + span;
+        pt0 = if rng.random_bool(0.5) {
+            t0 + off
+        } else {
+            t0 - off
+        };
+    }
     let mut positions = Vec::with_capacity(products.len());
     for i in 0..products.len() {
         let (row, col) = ((i / pcols) as i64, (i % pcols) as i64);
@@ -733,8 +759,13 @@ pub fn generated_cell(family: Family, seed: u64, rule: Option<Sequence>) -> Gene
 
     // The cell.
     let box_side = *Side::ALL.choose(&mut rng).expect("four sides");
-    let others: Vec<Side> = Side::ALL.into_iter().filter(|s| *s != box_side).collect();
-    let pending_side = *others.choose(&mut rng).expect("three sides");
+    let beside = family == Family::Compact;
+    let pending_side = if beside {
+        box_side
+    } else {
+        let others: Vec<Side> = Side::ALL.into_iter().filter(|s| *s != box_side).collect();
+        *others.choose(&mut rng).expect("three sides")
+    };
     let base = [
         stepped(&mut rng, -300, 300, 10),
         stepped(&mut rng, -300, 300, 10),
@@ -755,6 +786,7 @@ pub fn generated_cell(family: Family, seed: u64, rule: Option<Sequence>) -> Gene
                 [base[0], base[1]],
                 box_side,
                 pending_side,
+                beside,
                 &products,
                 slot_count,
                 ranges.box_depth,
@@ -861,7 +893,11 @@ pub fn generated_cell(family: Family, seed: u64, rule: Option<Sequence>) -> Gene
     );
     let _ = writeln!(t, "# regenerate it rather than edit it.");
     let _ = writeln!(t, "# The box stands {}.", box_side.phrase());
-    let _ = writeln!(t, "# The products wait {}.{riser}", pending_side.phrase());
+    if family == Family::Compact {
+        let _ = writeln!(t, "# The products wait beside it, on the same side.{riser}");
+    } else {
+        let _ = writeln!(t, "# The products wait {}.{riser}", pending_side.phrase());
+    }
     t.push('\n');
     let _ = writeln!(t, "cell {name} {{");
     let _ = writeln!(t, "  robot ur10");

@@ -32,6 +32,7 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<Exit> {
     let family = match args.family {
         CellFamily::Standard => Family::Standard,
         CellFamily::Wide => Family::Wide,
+        CellFamily::Compact => Family::Compact,
     };
     for seed in args.seed..=last {
         let generated = generated_cell(family, seed, rule);
