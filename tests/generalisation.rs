@@ -282,6 +282,17 @@ fn a_compact_cell_with_the_products_beside_the_box_is_packed() {
     }
 }
 
+/// A cell whose products wait far out (tests/cells/far_out.pack, the
+/// farthest 1.065 m from the base axis, where generated cells keep them
+/// within 0.95 m). A product let go from there came to rest tilted on
+/// its slot's edge, 16 mm up and packed by the rule; a node read it as
+/// raised, so held, and the reasoner chose the box with nothing in the
+/// cup. A node now reads as held only out of its slot.
+#[test]
+fn a_product_packed_tilted_in_its_slot_is_not_read_as_held() {
+    file_packs_without_fallback("tests/cells/far_out.pack", "far_out_case1_n/05");
+}
+
 /// A wide development cell (`generate --family wide --seed 109`): a 270
 /// mm deep carton and a 95 mm cup, where the expert lets go 10 cm up with
 /// wrist 3 a few millimetres from a wall, and the learned release 3 mm

@@ -124,7 +124,7 @@ pub struct SavedConfig {
 }
 
 /// The schema `config.json` declares.
-pub const SCHEMA: &str = "packwright.model/8";
+pub const SCHEMA: &str = "packwright.model/9";
 
 /// The files of a model directory.
 pub const FILES: [&str; 4] = [

@@ -23,6 +23,7 @@
 //!   with the base joint, and the shoulder and elbow, not the base angle:
 //!   the arm's motion is the same wherever it points.
 
+use packwright_interface::outcome::SUCCESS_RADIUS;
 use packwright_interface::{Graph, Stage, SubGoalQuery};
 
 /// Scale of the dynamics policy's outputs: actions are learnt as fractions
@@ -30,20 +31,31 @@ use packwright_interface::{Graph, Stage, SubGoalQuery};
 pub const ACTION_SCALE: f32 = packwright_interface::record::MAX_ACTION as f32;
 
 /// Inputs per node: selected (0/1), place along the chain (0 for the first
-/// product seen to 1 for the last), whether it is in its slot: its
-/// distance from its goal in units of [`PACKED`], at most 1, and whether
-/// it is raised: the height of its bottom over the table in units of
-/// [`RAISED`], at most 1.
+/// product seen to 1 for the last), whether it is out of its slot ([`out_of_slot`]:
+/// 0 within [`SUCCESS_RADIUS`] of its goal, as the rule judges a packed
+/// product, 1 from [`PACKED_RAMP`] beyond), and whether it is held:
+/// raised, the height of its bottom over the table in units of
+/// [`RAISED`], at most 1, times its "out of its slot" (a product let go
+/// tilted, resting on its slot's edge 16 mm up and packed by the rule,
+/// read as held, and the reasoner chose the box with nothing in the cup).
 pub const NODE_FEATURES: usize = 4;
-/// A selected product this far (m) from its goal or farther reads as not
-/// packed. Products wait outside the box, so a product not yet packed is
-/// always more than a product's width from its slot; a packed one is
-/// within millimetres of it. In decimetres up to 3, as it was, the
+/// How far beyond [`SUCCESS_RADIUS`] (m) a product's "out of its slot"
+/// input rises from 0 to 1. In decimetres up to 3, as it was, the
 /// reasoner learned "packed" from the distances of the cells it was
 /// taught (products waiting 0.3 m or more from their slots) and, in a
 /// compact cell with products waiting 12 cm from their slots, read them
-/// as packed and chose the box with nothing in the cup.
-pub const PACKED: f32 = 0.05;
+/// as packed and chose the box with nothing in the cup; in units of 5 cm
+/// (tried next) it learned "packed" from the expert's releases, a few
+/// millimetres off, and took products the learned planner had let go 1
+/// cm off, packed by the rule, as still to pick.
+pub const PACKED_RAMP: f32 = 0.005;
+
+/// A selected product's "out of its slot" input from its distance (m)
+/// from its goal: 0 up to [`SUCCESS_RADIUS`], 1 from [`PACKED_RAMP`]
+/// beyond, linear between.
+pub fn out_of_slot(away: f32) -> f32 {
+    ((away - SUCCESS_RADIUS as f32) / PACKED_RAMP).clamp(0.0, 1.0)
+}
 /// A product whose bottom is this high (m) over the table reads as raised
 /// (held): products stand on the table or on a box's floor, which is at
 /// table height, and a held one is carried the cell's `lift` up, at
@@ -156,11 +168,14 @@ pub fn node_rows(graph: &Graph) -> Vec<[f32; NODE_FEATURES]> {
                 0.0
             };
             let bottom = n.centre[2] - n.height / 2.0;
+            let out = out_of_slot(away);
             [
                 if n.selected { 1.0 } else { 0.0 },
                 i as f32 / last,
-                (away / PACKED).clamp(0.0, 1.0),
-                (bottom / RAISED).clamp(0.0, 1.0),
+                out,
+                // Held: raised, and not in its slot (a product let go
+                // tilted on its slot's edge is raised too, and packed).
+                out * (bottom / RAISED).clamp(0.0, 1.0),
             ]
         })
         .collect()
@@ -330,10 +345,11 @@ mod tests {
     use super::*;
     use packwright_interface::Node;
 
-    /// Whether a product is packed reads the same in any cell: one
-    /// waiting 12 cm from its slot (a compact cell, the products beside
-    /// the box) reads exactly as one waiting a metre away, and a packed
-    /// one a few millimetres off its goal reads nearly as one on it.
+    /// Whether a product is packed reads the same in any cell, as the
+    /// rule judges it: one waiting 12 cm from its slot (a compact cell,
+    /// the products beside the box) reads exactly as one waiting a metre
+    /// away, and one let go 1 cm or 2 cm off its goal (packed) exactly as
+    /// one on it.
     #[test]
     fn a_node_reads_packed_or_not_whatever_the_cells_distances() {
         let node = |x: f32| Node {
@@ -343,16 +359,33 @@ mod tests {
             goal: [0.0, 0.0, 0.03],
         };
         let rows = node_rows(&Graph {
-            nodes: vec![node(1.0), node(0.12), node(0.003), node(0.0)],
+            nodes: vec![node(1.0), node(0.12), node(0.0199), node(0.01), node(0.0)],
             slots: Vec::new(),
             held_goal: [0.0; 3],
         });
         let packed: Vec<f32> = rows.iter().map(|r| r[2]).collect();
-        assert_eq!(packed[0], 1.0);
-        assert_eq!(packed[1], packed[0], "{packed:?}");
-        assert!(packed[2] < 0.1 && packed[3] == 0.0, "{packed:?}");
+        assert_eq!(packed, [1.0, 1.0, 0.0, 0.0, 0.0]);
+        assert_eq!(out_of_slot(0.026), 1.0);
         // Standing on the table: not raised.
         assert!(rows.iter().all(|r| r[3] == 0.0));
+        // Lifted 20 mm where it stood: held. Let go tilted in its slot,
+        // its bottom 16 mm up and its centre 16 mm off its goal: packed,
+        // not held.
+        let lifted = Node {
+            centre: [0.3, 0.0, 0.05],
+            ..node(0.3)
+        };
+        let tilted = Node {
+            centre: [0.0, 0.0, 0.046],
+            ..node(0.0)
+        };
+        let rows = node_rows(&Graph {
+            nodes: vec![lifted, tilted],
+            slots: Vec::new(),
+            held_goal: [0.0; 3],
+        });
+        assert_eq!((rows[0][2], rows[0][3]), (1.0, 1.0));
+        assert_eq!((rows[1][2], rows[1][3]), (0.0, 0.0));
     }
 
     #[test]
