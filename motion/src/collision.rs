@@ -21,7 +21,7 @@
 
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use packwright_interface::outcome::Hit;
-use packwright_interface::scene::CellScene;
+use packwright_interface::scene::{CellScene, Placement};
 use packwright_interface::world::Body;
 use packwright_kinematics::body::{self, ArmPart, CUP, HELD_PADDING, PADDING, intersects, pose};
 use packwright_kinematics::{Arm, DOF, Joints};
@@ -145,6 +145,19 @@ pub struct ProductBody {
     pub centre: [f64; 3],
     pub size: [f64; 3],
     pub yaw: f64,
+}
+
+impl ProductBody {
+    /// A product where it stands when a package starts (square: placements
+    /// carry no yaw).
+    pub fn at_start(p: &Placement) -> ProductBody {
+        ProductBody {
+            name: p.product.name.clone(),
+            centre: p.centre,
+            size: p.product.size,
+            yaw: 0.0,
+        }
+    }
 }
 
 /// The part pairs a checker tests against each other: indices into

@@ -91,15 +91,7 @@ fn the_planner_and_the_simulator_agree() {
     let arm = Arm::ur10();
     let cell = bench_cell();
     let placements = placements();
-    let bodies: Vec<ProductBody> = placements
-        .iter()
-        .map(|p| ProductBody {
-            name: p.product.name.clone(),
-            centre: p.centre,
-            size: p.product.size,
-            yaw: 0.0,
-        })
-        .collect();
+    let bodies: Vec<ProductBody> = placements.iter().map(ProductBody::at_start).collect();
     let exact = {
         let mut c = Checker::with_padding(&arm, &cell, 0.0, 0.0);
         c.set_products(&bodies);

@@ -29,16 +29,8 @@ impl Episode {
     /// The arm's start pose (over the pending area), clear of the products
     /// standing in the cell where a branch is.
     pub fn home(&self) -> Result<Joints> {
-        let standing: Vec<ProductBody> = self
-            .placements
-            .iter()
-            .map(|p| ProductBody {
-                name: p.product.name.clone(),
-                centre: p.centre,
-                size: p.product.size,
-                yaw: 0.0,
-            })
-            .collect();
+        let standing: Vec<ProductBody> =
+            self.placements.iter().map(ProductBody::at_start).collect();
         execute::home_among(&self.arm, &self.task.cell, &standing).ok_or_else(|| {
             PipelineError::NoStartPose {
                 cell: self.task.cell.name.clone(),
