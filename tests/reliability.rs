@@ -1,7 +1,8 @@
 //! Bad input at the file-system edge: sources too large (or endless) are
 //! refused quickly, and temporary siblings left by killed runs are cleaned
 //! up by the next run; a run killed at any point leaves the old output or
-//! the new one whole.
+//! the new one whole; a model directory `eval` cannot use is refused
+//! before anything runs.
 
 mod common;
 use common::{packwright, scratch};
@@ -341,5 +342,42 @@ fn a_killed_train_leaves_the_old_model_or_the_new_one() {
     let made = packwright(&strs(&short));
     assert_eq!(made.status.code(), Some(0));
     assert!(siblings(&dir, "model").is_empty(), "no debris after a run");
+    let _ = fs::remove_dir_all(&dir);
+}
+
+/// A model named with `--model` that cannot be used (another schema, or
+/// no model there) is refused with exit 2 before a scenario runs, saying
+/// why; measuring only the baselines would answer another question.
+#[test]
+fn eval_refuses_a_model_it_cannot_use_before_running_anything() {
+    let dir = scratch("reliability", "eval-model");
+    let model = dir.join("old");
+    fs::create_dir_all(&model).expect("model dir");
+    for f in fs::read_dir("models/default").expect("the bundled model") {
+        let f = f.expect("entry").path();
+        let name = f.file_name().expect("a file name");
+        fs::copy(&f, model.join(name)).expect("copied");
+    }
+    let config = model.join("config.json");
+    let text = fs::read_to_string(&config).expect("config");
+    let old = text.replacen("\"packwright.model/", "\"packwright.model/0", 1);
+    assert_ne!(old, text);
+    fs::write(&config, old).expect("written");
+    let missing = dir.join("missing").display().to_string();
+    for bad in [model.display().to_string(), missing] {
+        let out = packwright(&[
+            "eval",
+            "orders/suites/measure.pack",
+            "--model",
+            &bad,
+            "--limit",
+            "1",
+            "--json",
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{bad}");
+        assert!(out.stdout.is_empty(), "{bad}: nothing measured");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(&bad), "{bad}: {err}");
+    }
     let _ = fs::remove_dir_all(&dir);
 }

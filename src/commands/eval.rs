@@ -88,14 +88,22 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
     // taught the cell (`follow_cell_rule`).
     let mut cell_rules = std::collections::BTreeMap::new();
     let mut all_results = Vec::new();
+    // Loaded once. A model named with --model that cannot be used (files
+    // missing, another schema, weights not finite) is refused before
+    // anything runs: measuring only the baselines would answer another
+    // question than the one asked.
+    let learned = choose_planner(Some(PlannerKind::Learned), args.model.as_deref());
+    if let (Some(_), Err(e)) = (&args.model, &learned) {
+        bail!("{e}");
+    }
     for suite in suites {
         let Some(first) = suite.cases.first() else {
             continue;
         };
         let cell = cell_of(&compiled, &first.setup);
-        let learned = choose_planner(Some(PlannerKind::Learned), args.model.as_deref());
-        let nets = match learned {
-            Ok((_, mut nets)) => {
+        let nets = match &learned {
+            Ok((_, nets)) => {
+                let mut nets = nets.clone();
                 if let Some(n) = &mut nets {
                     // Read once per cell (and said once), applied to every
                     // suite of the cell.
