@@ -50,7 +50,7 @@ pub struct Reachability {
 impl Reachability {
     pub fn new(arm: &Arm, cell: &CellScene) -> Reachability {
         let checker = Checker::new(arm, cell);
-        let start = home_on(&checker, cell, &[]);
+        let start = home_on(&checker, cell, None);
         Reachability {
             checker,
             cell: cell.clone(),
@@ -65,7 +65,7 @@ impl Reachability {
     pub fn among(&self, standing: &[ProductBody]) -> Reachability {
         let mut checker = self.checker.clone();
         checker.set_products(standing);
-        let start = home_on(&self.checker, &self.cell, standing);
+        let start = home_on(&self.checker, &self.cell, Some(&checker));
         Reachability {
             checker,
             cell: self.cell.clone(),

@@ -1141,16 +1141,23 @@ pub fn home(arm: &Arm, cell: &CellScene) -> Option<Joints> {
 /// collision). A cup close to the base over tall products can put the
 /// elbow of the branch nearest "ready" down among them.
 pub fn home_among(arm: &Arm, cell: &CellScene, standing: &[ProductBody]) -> Option<Joints> {
-    home_on(&Checker::new(arm, cell), cell, standing)
+    let checker = Checker::new(arm, cell);
+    let among = (!standing.is_empty()).then(|| {
+        let mut among = checker.clone();
+        among.set_products(standing);
+        among
+    });
+    home_on(&checker, cell, among.as_ref())
 }
 
-/// [`home_among`] with the cell's checker already built (its fixtures
-/// only: the descent it tries is a proxy for reaching down to a small
-/// product, not a motion among the standing ones).
+/// [`home_among`] with the cell's checkers already built: `checker` with
+/// its fixtures only (the descent it tries is a proxy for reaching down
+/// to a small product, not a motion among the standing ones), `among`
+/// with the standing products too, if any stand.
 pub(crate) fn home_on(
     checker: &Checker,
     cell: &CellScene,
-    standing: &[ProductBody],
+    among: Option<&Checker>,
 ) -> Option<Joints> {
     let top = home_tip(cell);
     let low = Point3::new(top[0], top[1], START_CHECK_HEIGHT);
@@ -1162,16 +1169,7 @@ pub(crate) fn home_on(
         reach(checker, low, 0.0, q, Load::FREE)
             .is_some_and(|down| checker.check_motion(q, &down, None, None).is_none())
     };
-    let among = (!standing.is_empty()).then(|| {
-        let mut among = checker.clone();
-        among.set_products(standing);
-        among
-    });
-    let clear = |q: &&Joints| {
-        among
-            .as_ref()
-            .is_none_or(|c| c.check(q, None, None).is_none())
-    };
+    let clear = |q: &&Joints| among.is_none_or(|c| c.check(q, None, None).is_none());
     free.iter()
         .filter(clear)
         .find(descends)
