@@ -293,6 +293,19 @@ fn a_product_packed_tilted_in_its_slot_is_not_read_as_held() {
     file_packs_without_fallback("tests/cells/far_out.pack", "far_out_case1_n/05");
 }
 
+/// A cell whose products wait 1.1-1.2 m out, for a box 80 mm wide
+/// (tests/cells/far_narrow.pack). The bundled model's sub-goal planner
+/// was taught "above the slot" from cup tips at most 0.15 m farther out
+/// than the slot; from 0.3 m out it answered 2 cm off, and the release
+/// after it 1 cm off, so that a 60 mm cube let go over the wall rested on
+/// it. A query beyond the taught ones is now answered as at their edge.
+#[test]
+fn a_query_farther_out_than_any_taught_is_answered_as_the_nearest_taught() {
+    for scenario in ["far_narrow_case1_n1/01", "far_narrow_untaught/02"] {
+        file_packs_without_fallback("tests/cells/far_narrow.pack", scenario);
+    }
+}
+
 /// A wide development cell (`generate --family wide --seed 109`): a 270
 /// mm deep carton and a 95 mm cup, where the expert lets go 10 cm up with
 /// wrist 3 a few millimetres from a wall, and the learned release 3 mm

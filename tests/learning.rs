@@ -135,7 +135,7 @@ fn eval_reports_every_planner_of_a_suite() {
     ]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
-    assert_eq!(report["schema"], "packwright.eval/2");
+    assert_eq!(report["schema"], "packwright.eval/3");
     let rows = report["rows"].as_array().expect("rows");
     let planners: Vec<&str> = rows.iter().filter_map(|r| r["planner"].as_str()).collect();
     assert_eq!(planners, ["learned", "rrt", "expert"]);

@@ -1,6 +1,7 @@
 //! What a model directory's `config.json` says: the architecture, how it
 //! was trained, and what it was taught.
 
+use crate::taught::TaughtQueries;
 use packwright_interface::SequenceRule;
 use serde::{Deserialize, Serialize};
 
@@ -121,10 +122,14 @@ pub struct SavedConfig {
     pub model: ModelConfig,
     pub training: TrainConfig,
     pub task: Task,
+    /// The range of the sub-goal planner's inputs over the queries it was
+    /// taught, per sub-goal kind: a query beyond them is answered as at
+    /// their edge ([`TaughtQueries`]).
+    pub taught_queries: TaughtQueries,
 }
 
 /// The schema `config.json` declares.
-pub const SCHEMA: &str = "packwright.model/9";
+pub const SCHEMA: &str = "packwright.model/10";
 
 /// The files of a model directory.
 pub const FILES: [&str; 4] = [

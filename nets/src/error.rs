@@ -34,6 +34,12 @@ pub enum ModelError {
     /// are not (weights so large that the arithmetic overflows).
     #[error("the {network} gives non-finite outputs on a probe input: its weights are unusable")]
     NonFiniteOutput { network: &'static str },
+    /// `taught_queries` holds a bound that is not finite, or a low end
+    /// above its high end.
+    #[error(
+        "config.json: `taught_queries` holds a bound that is not a finite range: train the model again (`packwright train`)"
+    )]
+    TaughtQueries,
     #[error("cannot write config.json: {reason}")]
     Write { reason: String },
 }

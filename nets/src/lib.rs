@@ -8,15 +8,19 @@
 //! - [`features`]: the training examples and the input encodings that
 //!   training and run time share;
 //! - [`forward`]: the forward passes;
-//! - [`networks`]: loading and answering.
+//! - [`networks`]: loading and answering;
+//! - [`taught`]: the range of the sub-goal queries a model was taught,
+//!   which bounds the queries it answers.
 
 pub mod config;
 pub mod error;
 pub mod features;
 pub mod forward;
 pub mod networks;
+pub mod taught;
 
 pub use config::{FILES, ModelConfig, SavedConfig, Task, TrainConfig};
 pub use error::ModelError;
 pub use features::{ActionExample, GraphExample, SubGoalExample, TrainingSet};
 pub use networks::{Networks, Weights};
+pub use taught::TaughtQueries;

@@ -12,6 +12,7 @@ use crate::features::{
     chain_slope, node_rows, slot_rows, subgoal_input, subgoal_position,
 };
 use crate::forward::{Dense, DynamicsWeights, ReasonerWeights, SageWeights, SubGoalWeights};
+use crate::taught::TaughtQueries;
 use packwright_interface::{Choice, Graph, Node, Policy, SequenceRule, Stage, SubGoalQuery};
 use safetensors::{Dtype, SafeTensors};
 
@@ -30,6 +31,9 @@ pub struct Networks {
     pub config: ModelConfig,
     pub training: TrainConfig,
     pub task: Task,
+    /// The queries the sub-goal planner was taught: it answers others as
+    /// at their edge.
+    pub taught_queries: TaughtQueries,
     weights: Weights,
 }
 
@@ -108,12 +112,14 @@ impl Networks {
         config: ModelConfig,
         training: TrainConfig,
         task: Task,
+        taught_queries: TaughtQueries,
         weights: Weights,
     ) -> Networks {
         Networks {
             config,
             training,
             task,
+            taught_queries,
             weights,
         }
     }
@@ -130,6 +136,7 @@ impl Networks {
             model: self.config.clone(),
             training: self.training.clone(),
             task: self.task.clone(),
+            taught_queries: self.taught_queries.clone(),
         };
         serde_json::to_vec_pretty(&saved).map_err(|e| ModelError::Write {
             reason: e.to_string(),
@@ -144,16 +151,23 @@ impl Networks {
         subgoal: &[u8],
         dynamics: &[u8],
     ) -> Result<Networks, ModelError> {
-        let saved: SavedConfig =
-            serde_json::from_slice(config).map_err(|e| ModelError::Config {
-                reason: e.to_string(),
-            })?;
-        if saved.schema != SCHEMA {
+        let bad = |e: serde_json::Error| ModelError::Config {
+            reason: e.to_string(),
+        };
+        // The schema first: a model of another schema lacks fields or has
+        // others, and "train again" says more than the missing field.
+        #[derive(serde::Deserialize)]
+        struct Schema {
+            schema: String,
+        }
+        let Schema { schema } = serde_json::from_slice(config).map_err(bad)?;
+        if schema != SCHEMA {
             return Err(ModelError::Schema {
-                found: saved.schema,
+                found: schema,
                 expected: SCHEMA,
             });
         }
+        let saved: SavedConfig = serde_json::from_slice(config).map_err(bad)?;
         let c = &saved.model;
         let widths = [
             c.graph_hidden,
@@ -202,12 +216,14 @@ impl Networks {
             config: saved.model,
             training: saved.training,
             task: saved.task,
+            taught_queries: saved.taught_queries,
             weights: Weights {
                 reasoner,
                 subgoal,
                 dynamics,
             },
         };
+        networks.taught_queries.check()?;
         networks.probe()?;
         Ok(networks)
     }
@@ -282,9 +298,13 @@ impl Networks {
         }
     }
 
-    /// The sub-goal planner's mean: the next cup-tip position.
+    /// The sub-goal planner's mean: the next cup-tip position; a query
+    /// beyond those taught is answered as at their edge
+    /// ([`TaughtQueries`]).
     pub fn subgoal(&self, query: &SubGoalQuery) -> [f32; 3] {
-        let v = self.weights.subgoal.mean(&subgoal_input(query));
+        let mut x = subgoal_input(query);
+        self.taught_queries.clamp(query, &mut x);
+        let v = self.weights.subgoal.mean(&x);
         subgoal_position(query, v)
     }
 
@@ -397,5 +417,60 @@ mod tests {
             Networks::from_files(CONFIG, SUBGOAL, SUBGOAL, DYNAMICS),
             Err(ModelError::Missing { .. })
         ));
+    }
+
+    /// `config.json` changed as `edit` says.
+    fn config_with(edit: impl Fn(&mut serde_json::Value)) -> Vec<u8> {
+        let mut config: serde_json::Value = serde_json::from_slice(CONFIG).expect("json");
+        edit(&mut config);
+        serde_json::to_vec(&config).expect("serialised")
+    }
+
+    /// A model of an older schema is refused as such (it lacks
+    /// `taught_queries`, and "train again" says more than the missing
+    /// field); taught bounds that are inverted are refused.
+    #[test]
+    fn an_older_schema_and_inverted_taught_bounds_are_refused() {
+        let older = config_with(|c| {
+            c["schema"] = "packwright.model/9".into();
+            if let Some(c) = c.as_object_mut() {
+                c.remove("taught_queries");
+            }
+        });
+        assert!(matches!(
+            Networks::from_files(&older, REASONER, SUBGOAL, DYNAMICS),
+            Err(ModelError::Schema { found, .. }) if found == "packwright.model/9"
+        ));
+        let inverted = config_with(|c| c["taught_queries"]["placing"][1]["low"][0] = 1.0.into());
+        assert_eq!(
+            Networks::from_files(&inverted, REASONER, SUBGOAL, DYNAMICS).err(),
+            Some(ModelError::TaughtQueries)
+        );
+    }
+
+    /// The bundled model answers "above the slot" from a cup tip 0.7 m
+    /// farther out than the slot as from the farthest it was taught, and
+    /// a taught query as its network does.
+    #[test]
+    fn the_bundled_model_answers_beyond_its_taught_queries_as_at_their_edge() {
+        let nets = Networks::from_files(CONFIG, REASONER, SUBGOAL, DYNAMICS).expect("loads");
+        let Some(taught) = nets.taught_queries.placing[1] else {
+            panic!("the bundled model was taught \"above the slot\"");
+        };
+        let query = |out: f32| SubGoalQuery {
+            stage: Stage::Placing,
+            index: 1,
+            feature: [0.5, 0.1, 0.07],
+            tool: [0.5 + out, 0.1, 0.2],
+            height: 0.04,
+            base: [0.0, 0.1, 0.0],
+        };
+        let edge = taught.high[0];
+        assert!(edge > 0.05 && edge < 0.5, "{edge}");
+        assert_eq!(nets.subgoal(&query(0.7)), nets.subgoal(&query(edge)));
+        let inside = query(edge / 2.0);
+        let unclamped =
+            subgoal_position(&inside, nets.weights.subgoal.mean(&subgoal_input(&inside)));
+        assert_eq!(nets.subgoal(&inside), unclamped);
     }
 }

@@ -35,8 +35,10 @@ pub enum PipelineError {
     /// Expanding a clean compilation's demonstrations failed.
     #[error(transparent)]
     Compile(Box<packwright_compiler::Error>),
-    #[error("{what}: {source}")]
-    Model { what: String, source: ModelError },
+    /// A model directory that cannot be used (`why` is not a `source`:
+    /// it is said once, in this message).
+    #[error("{what}: {why}")]
+    Model { what: String, why: ModelError },
     /// Demonstrations that follow no one sequence rule.
     #[error(
         "the demonstrations follow no one sequence rule: {detail}. A model learns one rule (ascending, descending or a listed priority) from demonstrations that mostly agree: choose blocks that do with --demos (`sequence random` teaches none)"

@@ -17,10 +17,10 @@ const DEFAULT: [&[u8]; 4] = [
 ];
 
 pub fn default_model() -> Result<Networks> {
-    Networks::from_files(DEFAULT[0], DEFAULT[1], DEFAULT[2], DEFAULT[3]).map_err(|source| {
+    Networks::from_files(DEFAULT[0], DEFAULT[1], DEFAULT[2], DEFAULT[3]).map_err(|why| {
         PipelineError::Model {
             what: "the bundled default model".into(),
-            source,
+            why,
         }
     })
 }
@@ -40,9 +40,9 @@ pub fn load_model(dir: &Path) -> Result<Networks> {
         &read(FILES[2])?,
         &read(FILES[3])?,
     )
-    .map_err(|source| PipelineError::Model {
+    .map_err(|why| PipelineError::Model {
         what: format!("{} is not a usable model", dir.display()),
-        source,
+        why,
     })
 }
 

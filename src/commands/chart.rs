@@ -77,7 +77,7 @@ fn read_report(path: &Path) -> anyhow::Result<Report> {
             path.display()
         )
     })?;
-    if report.schema != super::eval::SCHEMA {
+    if ![super::eval::SCHEMA, super::eval::PREVIOUS_SCHEMA].contains(&report.schema.as_str()) {
         bail!(
             "{} has schema `{}`; this packwright reads `{}` (run eval again)",
             path.display(),

@@ -21,15 +21,13 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
-/// A suite evaluated without the learned planner, and why.
-#[derive(Debug, Serialize)]
-struct Skipped {
-    suite: String,
-    reason: String,
-}
-
 /// The schema of `eval --json`, which `chart` reads back.
-pub const SCHEMA: &str = "packwright.eval/2";
+pub const SCHEMA: &str = "packwright.eval/3";
+
+/// The schema before it, which `chart` still reads: the same rows, and a
+/// list of suites measured without the learned planner (always empty
+/// now: a model that cannot be used is refused).
+pub const PREVIOUS_SCHEMA: &str = "packwright.eval/2";
 
 /// The machine the figures were measured on.
 #[derive(Debug, Serialize)]
@@ -46,7 +44,6 @@ struct EvalReport<'a> {
     seed: u64,
     machine: Machine,
     rows: &'a [Row],
-    skipped: &'a [Skipped],
 }
 
 pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
@@ -83,51 +80,34 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
         bail!("the files define no `scenarios` suite to evaluate");
     }
     let mut rows = Vec::new();
-    let mut skipped = Vec::new();
     // The order each cell's own demonstrations teach a model that was not
     // taught the cell (`follow_cell_rule`).
     let mut cell_rules = std::collections::BTreeMap::new();
     let mut all_results = Vec::new();
-    // Loaded once. A model named with --model that cannot be used (files
-    // missing, another schema, weights not finite) is refused before
+    // Loaded once. A model that cannot be used (files missing, another
+    // schema, weights not finite; the bundled one too) is refused before
     // anything runs: measuring only the baselines would answer another
     // question than the one asked.
-    let learned = choose_planner(Some(PlannerKind::Learned), args.model.as_deref());
-    if let (Some(_), Err(e)) = (&args.model, &learned) {
-        bail!("{e}");
-    }
+    let (_, learned) = choose_planner(Some(PlannerKind::Learned), args.model.as_deref())?;
     for suite in suites {
         let Some(first) = suite.cases.first() else {
             continue;
         };
         let cell = cell_of(&compiled, &first.setup);
-        let nets = match &learned {
-            Ok((_, nets)) => {
-                let mut nets = nets.clone();
-                if let Some(n) = &mut nets {
-                    // Read once per cell (and said once), applied to every
-                    // suite of the cell.
-                    match cell_rules.get(&cell) {
-                        Some(CellRule::Followed(rule)) => n.task.sequence = rule.clone(),
-                        Some(_) => {}
-                        None => {
-                            let rule = follow_cell_rule(n, &compiled, &cell);
-                            super::execute::note_cell_rule(&cell, &rule, &n.task.sequence);
-                            cell_rules.insert(cell.clone(), rule);
-                        }
-                    }
+        let mut nets = learned.clone();
+        if let Some(n) = &mut nets {
+            // Read once per cell (and said once), applied to every suite
+            // of the cell.
+            match cell_rules.get(&cell) {
+                Some(CellRule::Followed(rule)) => n.task.sequence = rule.clone(),
+                Some(_) => {}
+                None => {
+                    let rule = follow_cell_rule(n, &compiled, &cell);
+                    super::execute::note_cell_rule(&cell, &rule, &n.task.sequence);
+                    cell_rules.insert(cell.clone(), rule);
                 }
-                nets
             }
-            Err(e) => {
-                errln!("{}: no learned planner ({e})", suite.name);
-                skipped.push(Skipped {
-                    suite: suite.name.clone(),
-                    reason: e.to_string(),
-                });
-                None
-            }
-        };
+        }
         let mut planners = Vec::new();
         if nets.is_some() {
             planners.push(PlannerKind::Learned);
@@ -229,7 +209,6 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
             seed: args.seed,
             machine,
             rows: &rows,
-            skipped: &skipped,
         };
         outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {

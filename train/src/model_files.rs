@@ -4,7 +4,9 @@
 use crate::model::{DynamicsPolicy, Reasoner, SubGoalPlanner};
 use burn::store::{ModuleSnapshot, SafetensorsStore};
 use packwright_nets::config::FILES;
-use packwright_nets::{ModelConfig, ModelError, Networks, Task, TrainConfig, Weights};
+use packwright_nets::{
+    ModelConfig, ModelError, Networks, Task, TaughtQueries, TrainConfig, Weights,
+};
 
 /// The three trained modules and their run-time twin.
 #[derive(Debug, Clone)]
@@ -41,6 +43,7 @@ impl Trained {
     pub(crate) fn new(
         config: ModelConfig,
         training: TrainConfig,
+        taught_queries: TaughtQueries,
         reasoner: Reasoner,
         subgoal: SubGoalPlanner,
         dynamics: DynamicsPolicy,
@@ -54,7 +57,7 @@ impl Trained {
         })()
         .ok_or(SaveError::Values)?;
         Ok(Trained {
-            networks: Networks::new(config, training, Task::default(), weights),
+            networks: Networks::new(config, training, Task::default(), taught_queries, weights),
             reasoner,
             subgoal,
             dynamics,
@@ -136,6 +139,7 @@ mod tests {
         let trained = Trained::new(
             c.clone(),
             TrainConfig::default(),
+            TaughtQueries::default(),
             Reasoner::new(&c, &device),
             SubGoalPlanner::new(&c, &device),
             DynamicsPolicy::new(&c, &device),

@@ -14,7 +14,7 @@ use packwright_interface::Stage;
 use packwright_nets::features::{
     ActionExample, GraphExample, SubGoalExample, TrainingSet, subgoal_position,
 };
-use packwright_nets::{ModelConfig, TrainConfig};
+use packwright_nets::{ModelConfig, TaughtQueries, TrainConfig};
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
@@ -553,6 +553,7 @@ pub fn train(
     let networks = Trained::new(
         model_config,
         config.clone(),
+        TaughtQueries::of(set.subgoals.iter().map(|e| &e.query)),
         reasoner.valid(),
         subgoal.valid(),
         dynamics.valid(),
@@ -775,6 +776,13 @@ mod tests {
             nets.action([0.01, 0.02, -0.01], [0.1, -1.0, 1.2]),
             loaded.action([0.01, 0.02, -0.01], [0.1, -1.0, 1.2])
         );
+        // The queries taught are saved with it, and bound its answers.
+        let taught = TaughtQueries::of(set.subgoals.iter().map(|e| &e.query));
+        assert_eq!(loaded.taught_queries, taught);
+        assert!(taught.placing.iter().all(Option::is_some));
+        for probe in &set.subgoals[..4] {
+            assert_eq!(nets.subgoal(&probe.query), loaded.subgoal(&probe.query));
+        }
         // Same seed, same training.
         let (again, metrics_again) = train(&set, &config, None, &|_| {}).expect("trains");
         let losses = |m: &Metrics| {
