@@ -53,7 +53,7 @@ fn main() {
     let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
     // The product's motion comes down onto P1's top face: P1 is not an
     // obstacle for the cup (as a planner's load ignores it).
-    let cup_on_p1 = Load::ignoring("P1");
+    let cup_on_p1 = Load::picking("P1");
     let at = |x: f64, y: f64, z: f64| {
         reach(&checker, Point3::new(x, y, z), 0.0, &ready, cup_on_p1).expect("reachable")
     };

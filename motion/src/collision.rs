@@ -5,8 +5,9 @@
 //! an axis-aligned bounding-box prefilter.
 //!
 //! What is checked: every arm part against the table (except the base and
-//! shoulder links, which stand on it), the boxes and the products (except
-//! the one being picked); non-adjacent arm parts against each other (except
+//! shoulder links, which stand on it), the boxes and the products (the cup
+//! may touch the one being picked from above only, and the one just
+//! released anywhere: [`Touch`]); non-adjacent arm parts against each other (except
 //! the pairs that touch by construction, `body::touching_pairs`); a held
 //! product against everything but the cup and the last link, which hold
 //! it. A motion between two configurations is checked at joint steps of at
@@ -50,6 +51,41 @@ struct Obstacle {
     aabb: Aabb,
     /// The table: the base and shoulder links stand on it.
     is_table: bool,
+    /// The height of its top face (it stands upright).
+    top: f64,
+}
+
+/// A product the cup may touch ([`Checker::check`]), by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Touch<'a> {
+    /// Being picked: the cup meets its top face from above. The cup's
+    /// body ends [`CUP_SHORT`](body::CUP_SHORT) above the tip, so with
+    /// the tip no lower than that under the top face the cup cannot be
+    /// inside the product; lower, the cup may not meet it (a fallback's
+    /// RRT-Connect path to the pick that swept the cup into the product's
+    /// side passed the check, and the simulator saw the collision).
+    Picking(&'a str),
+    /// Just released: the cup may touch it anywhere (it lies where it
+    /// landed, perhaps tilted against the cup), as the simulator allows.
+    Released(&'a str),
+}
+
+impl<'a> Touch<'a> {
+    /// The product touched.
+    pub fn product(self) -> &'a str {
+        match self {
+            Touch::Picking(name) | Touch::Released(name) => name,
+        }
+    }
+
+    /// Whether the cup, its tip at height `tip`, may meet the product
+    /// whose top face is at `top`.
+    fn allows(self, tip: f64, top: f64) -> bool {
+        match self {
+            Touch::Picking(_) => tip >= top - body::CUP_SHORT,
+            Touch::Released(_) => true,
+        }
+    }
 }
 
 impl Obstacle {
@@ -67,6 +103,7 @@ impl Obstacle {
             pose,
             shape,
             aabb,
+            top: centre[2] + half[2],
         }
     }
 }
@@ -264,9 +301,9 @@ impl Checker {
     }
 
     /// The first collision of the arm (and `held`) at joints `q`. The
-    /// product named `ignore` (the one being picked, or just released) is
-    /// ignored by the cup alone, which touches its top face: a link that
-    /// reaches it still collides.
+    /// product `touch` names (the one being picked, or just released) may
+    /// be touched by the cup alone, as [`Touch`] says: a link that reaches
+    /// it still collides.
     ///
     /// In order (the first found is the answer): each part against the
     /// obstacles (the fixed ones, then the products), the checked part
@@ -275,7 +312,7 @@ impl Checker {
     /// box are computed once and shared by every test; an obstacle whose
     /// box misses the whole arm's is skipped for every part (it misses
     /// each part's).
-    pub fn check(&self, q: &Joints, held: Option<&Held>, ignore: Option<&str>) -> Option<Hit> {
+    pub fn check(&self, q: &Joints, held: Option<&Held>, touch: Option<Touch>) -> Option<Hit> {
         if q.iter().any(|v| !v.is_finite()) {
             return Some(Hit::InvalidJoints);
         }
@@ -318,10 +355,22 @@ impl Checker {
             .chain(&self.products)
             .filter(|o| !is(o, held_name) && o.aabb.intersects(&whole))
             .collect();
+        let ignore = touch.map(Touch::product);
+        // The cup tip's height, where the cup meets the touched product.
+        let tip = || {
+            let tip = (links[DOF] * self.arm.flange).transform_point(&nalgebra::Point3::new(
+                0.0,
+                0.0,
+                self.suction,
+            ));
+            tip.z
+        };
         for (part, (p, aabb)) in self.parts.iter().zip(placed) {
             let by_cup = part.part == CUP;
             for &o in &near {
-                if (o.is_table && part.part <= 1) || (by_cup && is(o, ignore)) {
+                let touched =
+                    || by_cup && is(o, ignore) && touch.is_some_and(|t| t.allows(tip(), o.top));
+                if (o.is_table && part.part <= 1) || touched() {
                     continue;
                 }
                 if aabb.intersects(&o.aabb) && intersects(p, &*part.shape, &o.pose, &*o.shape) {
@@ -379,7 +428,7 @@ impl Checker {
         q0: &Joints,
         q1: &Joints,
         held: Option<&Held>,
-        ignore: Option<&str>,
+        touch: Option<Touch>,
     ) -> Option<Hit> {
         let span = q0
             .iter()
@@ -387,13 +436,13 @@ impl Checker {
             .map(|(a, b)| (b - a).abs())
             .fold(0.0, f64::max);
         if !span.is_finite() {
-            return self.check(q1, held, ignore);
+            return self.check(q1, held, touch);
         }
         let steps = (span / MAX_STEP).ceil().max(1.0) as usize;
         (0..=steps).find_map(|k| {
             let t = k as f64 / steps as f64;
             let q: Joints = std::array::from_fn(|j| q0[j] + (q1[j] - q0[j]) * t);
-            self.check(&q, held, ignore)
+            self.check(&q, held, touch)
         })
     }
 }
@@ -414,7 +463,7 @@ mod tests {
         allowed: &[(usize, usize)],
         q: &Joints,
         held: Option<&Held>,
-        ignore: Option<&str>,
+        touch: Option<Touch>,
     ) -> Option<Hit> {
         use body::exact_intersects as intersects;
         if q.iter().any(|v| !v.is_finite()) {
@@ -426,9 +475,15 @@ mod tests {
             .iter()
             .map(|p| pose(&(links[p.link()] * p.local)))
             .collect();
+        let tip = c
+            .arm
+            .flange_pose(&c.base, q)
+            .transform_point(&nalgebra::Point3::new(0.0, 0.0, c.suction))
+            .z;
         let skipped = |o: &Obstacle, by_cup: bool| match &o.body {
             Body::Product(n) => {
-                (by_cup && Some(n.as_str()) == ignore) || held.is_some_and(|h| &h.name == n)
+                let touched = touch.filter(|t| t.product() == n && t.allows(tip, o.top));
+                (by_cup && touched.is_some()) || held.is_some_and(|h| &h.name == n)
             }
             _ => false,
         };
@@ -479,7 +534,13 @@ mod tests {
             let (hp, cuboid) = h.padded_box(&flange, c.held_padding);
             let aabb = cuboid.compute_aabb(&hp);
             let name = Body::Held(h.name.clone());
-            for o in obstacles(true) {
+            // The held product is kept off everything but itself and the
+            // touched product, wherever the cup is.
+            let named = |o: &Obstacle, n: Option<&str>| matches!(&o.body, Body::Product(p) if Some(p.as_str()) == n);
+            let others = c.statics.iter().chain(c.products.iter().filter(|o| {
+                !named(o, Some(h.name.as_str())) && !named(o, touch.map(Touch::product))
+            }));
+            for o in others {
                 if aabb.intersects(&o.aabb) && intersects(&hp, &cuboid, &o.pose, &*o.shape) {
                     return Some(Hit::Bodies {
                         a: name,
@@ -599,7 +660,11 @@ mod tests {
                 2 => Some(held.clone().leaving_support()),
                 _ => None,
             };
-            let ignore = (k % 5 < 2).then_some("P1");
+            let ignore = match k % 5 {
+                0 => Some(Touch::Picking("P1")),
+                1 => Some(Touch::Released("P1")),
+                _ => None,
+            };
             let got = checker.check(&q, h.as_ref(), ignore);
             assert_eq!(
                 got,

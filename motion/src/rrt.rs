@@ -9,7 +9,7 @@
 //! the path is shortcut (random pairs joined directly when the motion is
 //! free) and checked once more as a whole.
 
-use crate::collision::{Checker, Held};
+use crate::collision::{Checker, Held, Touch};
 use packwright_kinematics::{DOF, Joints, Limits};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -46,8 +46,9 @@ pub struct Query<'a> {
     pub checker: &'a Checker,
     pub limits: &'a [Limits; DOF],
     pub held: Option<&'a Held>,
-    /// The product being picked (touching it is the point).
-    pub ignore: Option<&'a str>,
+    /// The product being picked or just released, which the cup may touch
+    /// ([`Touch`]).
+    pub ignore: Option<Touch<'a>>,
 }
 
 impl Query<'_> {

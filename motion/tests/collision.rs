@@ -8,7 +8,7 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use packwright_interface::outcome::Hit;
 use packwright_interface::world::Body;
 use packwright_kinematics::{Arm, Joints};
-use packwright_motion::collision::{Checker, Held, ProductBody};
+use packwright_motion::collision::{Checker, Held, ProductBody, Touch};
 use packwright_motion::rrt::{self, Query, RrtConfig};
 use std::f64::consts::FRAC_PI_2;
 
@@ -81,7 +81,10 @@ fn products_are_obstacles_except_the_one_being_picked() {
     checker.set_products(&[cube("A", [0.6, -0.3, 0.025], 0.05)]);
     // The cup's tip on A's top face: touching A is fine when picking A.
     let on_top = ik(&arm, [0.6, -0.3, 0.05]);
-    assert_eq!(checker.check(&on_top, None, Some("A")), None);
+    assert_eq!(
+        checker.check(&on_top, None, Some(Touch::Picking("A"))),
+        None
+    );
     // The cup pushed 2 cm into A hits A when A is not being picked (the
     // cup's model ends 5 mm short of its tip).
     let inside = ik(&arm, [0.6, -0.3, 0.03]);
@@ -95,7 +98,48 @@ fn products_are_obstacles_except_the_one_being_picked() {
         cube("A", [0.6, -0.3, 0.025], 0.05),
         cube("B", [0.72, -0.3, 0.025], 0.05),
     ]);
-    assert_eq!(checker.check(&on_top, None, Some("A")), None);
+    assert_eq!(
+        checker.check(&on_top, None, Some(Touch::Picking("A"))),
+        None
+    );
+}
+
+/// The cup may meet the product it picks from above only: swept into its
+/// side (as a fallback's RRT-Connect path to a pick did, on a cell whose
+/// products stand near the base), it collides, as in the simulator. The
+/// product just released it may touch anywhere.
+#[test]
+fn the_cup_meets_the_product_it_picks_from_above_only() {
+    let arm = Arm::ur10();
+    let mut checker = Checker::new(&arm, &bench_cell());
+    checker.set_products(&[cube("A", [0.6, -0.3, 0.025], 0.05)]);
+    // The tip 4 mm under the top face (the cup's body ends 5 mm above the
+    // tip): still on it.
+    let pressed = ik(&arm, [0.6, -0.3, 0.046]);
+    assert_eq!(
+        checker.check(&pressed, None, Some(Touch::Picking("A"))),
+        None
+    );
+    // Beside A at half its height, the cup overlapping its side.
+    let beside = ik(&arm, [0.635, -0.3, 0.025]);
+    let hit = checker
+        .check(&beside, None, Some(Touch::Picking("A")))
+        .expect("a collision");
+    assert!(
+        matches!(&hit, Hit::Bodies { a: Body::Cup, b: Body::Product(n) } if n == "A"),
+        "{hit:?}"
+    );
+    assert_eq!(
+        checker.check(&beside, None, Some(Touch::Released("A"))),
+        None
+    );
+    // A motion from above A down its side collides when picking it.
+    let above = ik(&arm, [0.635, -0.3, 0.15]);
+    assert!(
+        checker
+            .check_motion(&above, &beside, None, Some(Touch::Picking("A")))
+            .is_some()
+    );
 }
 
 #[test]

@@ -193,7 +193,7 @@ impl<W: World> Scripted<'_, W> {
         let (centre, yaw) = obs.find(name).ok_or(Failure::Disappeared)?;
         let h = spec.size[2];
         let picking = expert::picking(centre, h, cell.lift);
-        let free = Load::ignoring(name);
+        let free = Load::picking(name);
         // Once gripped, the lift carries the product off where it stood.
         let gripped = Held::under_cup(name, spec.size, cell.suction, Vector3::zeros());
         let lifting = gripped.clone().leaving_support();
@@ -242,9 +242,10 @@ impl<W: World> Scripted<'_, W> {
             tip: [slot[0], slot[1], placing[1].tip[2]],
             suction: Suction::Keep,
         }];
-        let plan = self.plan_stage(obs.joints, &up, 0.0, [free; 3])?;
+        let left = Load::released(name);
+        let plan = self.plan_stage(obs.joints, &up, 0.0, [left; 3])?;
         // Kept, to be sent with the next product's hover.
-        self.run_stage(plan, 0.0, [free; 3], None, Vec::new(), true)
+        self.run_stage(plan, 0.0, [left; 3], None, Vec::new(), true)
     }
 }
 

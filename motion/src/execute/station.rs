@@ -9,7 +9,7 @@
 //! return.
 
 use crate::blend::{Blended, blend_straight};
-use crate::collision::{Checker, Held, MAX_STEP, ProductBody};
+use crate::collision::{Checker, Held, MAX_STEP, ProductBody, Touch};
 use crate::expert::{SubGoal, Suction};
 use crate::rrt::{self, Query, RrtConfig};
 use crate::smoothing::lower_bound;
@@ -61,7 +61,10 @@ pub(crate) struct Leg {
     pub route: Route,
     pub suction: Suction,
     pub held: Option<Held>,
+    /// The product the cup may touch, and whether it was just released
+    /// (else it is being picked: [`Touch`]).
     pub ignore: Option<String>,
+    pub released: bool,
     pub speed: f64,
 }
 
@@ -76,7 +79,8 @@ impl Leg {
             route,
             suction,
             held: load.held.cloned(),
-            ignore: load.ignore.map(str::to_owned),
+            ignore: load.ignore.map(|t| t.product().to_owned()),
+            released: matches!(load.ignore, Some(Touch::Released(_))),
             speed: load.speed,
         }
     }
@@ -84,7 +88,10 @@ impl Leg {
     pub fn load(&self) -> Load<'_> {
         Load {
             held: self.held.as_ref(),
-            ignore: self.ignore.as_deref(),
+            ignore: self.ignore.as_deref().map(|name| match self.released {
+                true => Touch::Released(name),
+                false => Touch::Picking(name),
+            }),
             speed: self.speed,
         }
     }
@@ -132,11 +139,12 @@ pub(crate) struct Clock {
 }
 
 /// What a motion carries and may touch: the product held, and the one
-/// being picked (not an obstacle); and how fast it moves.
+/// being picked or just released (the cup may touch it: [`Touch`]); and
+/// how fast it moves.
 #[derive(Debug, Clone, Copy)]
 pub struct Load<'h> {
     pub held: Option<&'h Held>,
-    pub ignore: Option<&'h str>,
+    pub ignore: Option<Touch<'h>>,
     /// The share of the arm's speed the motion moves at: 1, but on the
     /// guarded descent onto a top face the cell's `descent`
     /// ([`Load::guarded`]; [`blend_slowed`](crate::blend::blend_slowed) says how a share in (0, 1)
@@ -158,12 +166,22 @@ impl<'h> Load<'h> {
         speed: 1.0,
     };
 
-    /// Nothing held; the product `name` (being picked, or just released)
-    /// is no obstacle.
-    pub fn ignoring(name: &'h str) -> Load<'h> {
+    /// Nothing held; the cup goes to pick the product `name`, whose top
+    /// face it may touch from above ([`Touch::Picking`]).
+    pub fn picking(name: &'h str) -> Load<'h> {
         Load {
             held: None,
-            ignore: Some(name),
+            ignore: Some(Touch::Picking(name)),
+            speed: 1.0,
+        }
+    }
+
+    /// Nothing held; the cup leaves the product `name` it just let go,
+    /// which it may touch anywhere ([`Touch::Released`]).
+    pub fn released(name: &'h str) -> Load<'h> {
+        Load {
+            held: None,
+            ignore: Some(Touch::Released(name)),
             speed: 1.0,
         }
     }

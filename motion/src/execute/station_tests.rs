@@ -139,7 +139,8 @@ fn transitions_ignore_nothing_and_stops_keep_their_clearance() {
     let held = Held::under_cup("P", size, cell.suction, nalgebra::Vector3::zeros());
     let lifting = held.clone().leaving_support();
     let load_of = |k: usize| match k {
-        0 | 1 | 6 => Load::ignoring("P"),
+        0 | 1 => Load::picking("P"),
+        6 => Load::released("P"),
         2 => Load::holding(&lifting),
         _ => Load::holding(&held),
     };

@@ -634,7 +634,7 @@ impl<W: World> Learned<'_, W> {
     /// where they fall short); not sent: it is sent with the next
     /// product's hover (or alone at the end of the run).
     fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<Leg, Failure> {
-        let load = Load::ignoring(name);
+        let load = Load::released(name);
         // The released product where it lies (its last observed place was
         // under the cup). Observed before the planning is timed, as the
         // other planners observe before they plan their back-up.
@@ -783,7 +783,7 @@ impl<W: World> Learned<'_, W> {
                 feature: centre,
                 height: spec.size[2],
                 contact: Some(centre[2] + spec.size[2] / 2.0),
-                load: Load::ignoring(name),
+                load: Load::picking(name),
                 gripped: Some(spec.size),
                 expert: expert::picking(centre, spec.size[2], cell.lift),
                 inside: None,
