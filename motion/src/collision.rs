@@ -55,15 +55,25 @@ struct Obstacle {
     top: f64,
 }
 
+/// How far (m) above the top face of the product it picks the cup's
+/// unpadded body stays while it meets the product ([`Touch::Picking`]):
+/// the simulator counts a contact within half a millimetre, and a checked
+/// motion moves up to a degree between checked configurations. Cup down,
+/// the tip may still go 2 mm under the face (the body ends 5 mm above it).
+pub const TOUCH_CLEARANCE: f64 = 0.003;
+
 /// A product the cup may touch ([`Checker::check`]), by name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Touch<'a> {
-    /// Being picked: the cup meets its top face from above. The cup's
-    /// body ends [`CUP_SHORT`](body::CUP_SHORT) above the tip, so with
-    /// the tip no lower than that under the top face the cup cannot be
-    /// inside the product; lower, the cup may not meet it (a fallback's
-    /// RRT-Connect path to the pick that swept the cup into the product's
-    /// side passed the check, and the simulator saw the collision).
+    /// Being picked: the cup meets its top face from above. The cup
+    /// (its body as the simulator has it, without the planner's padding,
+    /// [`CUP_SHORT`](body::CUP_SHORT) short of the tip) may meet it
+    /// while no point of that body is below the top face: then it cannot
+    /// be inside the product (cup down, the tip up to `CUP_SHORT` under
+    /// the face). Lower, or tilted into it, the cup may not meet it: a
+    /// fallback's RRT-Connect path to the pick that swept the cup into
+    /// the product's side passed the check, and the simulator saw the
+    /// collision.
     Picking(&'a str),
     /// Just released: the cup may touch it anywhere (it lies where it
     /// landed, perhaps tilted against the cup), as the simulator allows.
@@ -78,14 +88,24 @@ impl<'a> Touch<'a> {
         }
     }
 
-    /// Whether the cup, its tip at height `tip`, may meet the product
-    /// whose top face is at `top`.
-    fn allows(self, tip: f64, top: f64) -> bool {
+    /// Whether the cup, the lowest point of its unpadded body at height
+    /// `bottom`, may meet the product whose top face is at `top`.
+    fn allows(self, bottom: f64, top: f64) -> bool {
         match self {
-            Touch::Picking(_) => tip >= top - body::CUP_SHORT,
+            Touch::Picking(_) => bottom >= top + TOUCH_CLEARANCE,
             Touch::Released(_) => true,
         }
     }
+}
+
+/// The height of the lowest point of the cup's unpadded body (a capsule
+/// of radius [`CUP_RADIUS`](body::CUP_RADIUS) along the flange's z axis,
+/// ending [`CUP_SHORT`](body::CUP_SHORT) above the tip of a cup
+/// `suction` long) with the flange at `flange`.
+fn cup_bottom(flange: &Isometry3<f64>, suction: f64) -> f64 {
+    let end = (suction - body::CUP_SHORT - body::CUP_RADIUS).max(0.0);
+    let far = flange.transform_point(&nalgebra::Point3::new(0.0, 0.0, end));
+    flange.translation.z.min(far.z) - body::CUP_RADIUS
 }
 
 impl Obstacle {
@@ -356,20 +376,13 @@ impl Checker {
             .filter(|o| !is(o, held_name) && o.aabb.intersects(&whole))
             .collect();
         let ignore = touch.map(Touch::product);
-        // The cup tip's height, where the cup meets the touched product.
-        let tip = || {
-            let tip = (links[DOF] * self.arm.flange).transform_point(&nalgebra::Point3::new(
-                0.0,
-                0.0,
-                self.suction,
-            ));
-            tip.z
-        };
+        // Where the cup meets the touched product: its lowest point.
+        let bottom = || cup_bottom(&(links[DOF] * self.arm.flange), self.suction);
         for (part, (p, aabb)) in self.parts.iter().zip(placed) {
             let by_cup = part.part == CUP;
             for &o in &near {
                 let touched =
-                    || by_cup && is(o, ignore) && touch.is_some_and(|t| t.allows(tip(), o.top));
+                    || by_cup && is(o, ignore) && touch.is_some_and(|t| t.allows(bottom(), o.top));
                 if (o.is_table && part.part <= 1) || touched() {
                     continue;
                 }
@@ -475,14 +488,10 @@ mod tests {
             .iter()
             .map(|p| pose(&(links[p.link()] * p.local)))
             .collect();
-        let tip = c
-            .arm
-            .flange_pose(&c.base, q)
-            .transform_point(&nalgebra::Point3::new(0.0, 0.0, c.suction))
-            .z;
+        let bottom = cup_bottom(&c.arm.flange_pose(&c.base, q), c.suction);
         let skipped = |o: &Obstacle, by_cup: bool| match &o.body {
             Body::Product(n) => {
-                let touched = touch.filter(|t| t.product() == n && t.allows(tip, o.top));
+                let touched = touch.filter(|t| t.product() == n && t.allows(bottom, o.top));
                 (by_cup && touched.is_some()) || held.is_some_and(|h| &h.name == n)
             }
             _ => false,

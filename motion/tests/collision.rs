@@ -113,9 +113,15 @@ fn the_cup_meets_the_product_it_picks_from_above_only() {
     let arm = Arm::ur10();
     let mut checker = Checker::new(&arm, &bench_cell());
     checker.set_products(&[cube("A", [0.6, -0.3, 0.025], 0.05)]);
-    // The tip 4 mm under the top face (the cup's body ends 5 mm above the
-    // tip): still on it.
-    let pressed = ik(&arm, [0.6, -0.3, 0.046]);
+    // The tip 1.5 mm under the top face (the cup's body ends 5 mm above
+    // the tip, and keeps TOUCH_CLEARANCE over the face): still on it.
+    let pressed = ik(&arm, [0.6, -0.3, 0.0485]);
+    let deeper = ik(&arm, [0.6, -0.3, 0.044]);
+    assert!(
+        checker
+            .check(&deeper, None, Some(Touch::Picking("A")))
+            .is_some()
+    );
     assert_eq!(
         checker.check(&pressed, None, Some(Touch::Picking("A"))),
         None
