@@ -165,6 +165,9 @@ impl Lesson {
                 if let Some(more) = with_more_selected(&graph, choice.node) {
                     set.graphs.push(example(more));
                 }
+                if let Some(fewer) = without_later(&graph, choice.node) {
+                    set.graphs.push(example(fewer));
+                }
                 set.graphs.push(example(graph));
             }
             if let Some(log) = log {
@@ -215,6 +218,25 @@ fn with_more_selected(graph: &Graph, chosen: Option<usize>) -> Option<Graph> {
         }
     }
     changed.then_some(more)
+}
+
+/// A picking decision's graph without the products after the chosen one
+/// along the chain (missing stock), and the same answer under the rule:
+/// the chosen product is still the first selected one not in its slot,
+/// now last along the chain. A node's place is its index over the chain's
+/// length, so the products before it that the rule skips (packed, or not
+/// in the order) now stand a whole chain before it. A reasoner taught
+/// only the demonstrations' places chose a packed product at the chain's
+/// head over a waiting one at its tail, a pair of places no demonstration
+/// of 2 of 6 products showed (per-cell models of generated cells, e.g.
+/// development cell 2903). `None` for a placing decision or when the
+/// chosen product is already last.
+fn without_later(graph: &Graph, chosen: Option<usize>) -> Option<Graph> {
+    let keep = chosen? + 1;
+    (keep < graph.nodes.len()).then(|| Graph {
+        nodes: graph.nodes[..keep].to_vec(),
+        ..graph.clone()
+    })
 }
 
 /// Share of the demonstrations a rule must explain to be taught.
@@ -360,4 +382,42 @@ pub fn sequence_rule(world: &WorldFile, demos: &[DemonstrationRecord]) -> Result
         return Err(PipelineError::ContradictorySequence { detail });
     }
     Ok(best)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use packwright_interface::Node;
+
+    fn graph(n: usize) -> Graph {
+        Graph {
+            nodes: (0..n)
+                .map(|i| Node {
+                    centre: [0.1 * i as f32, 0.5, 0.02],
+                    height: 0.04,
+                    selected: i % 2 == 0,
+                    goal: [0.0, -0.5, 0.02],
+                })
+                .collect(),
+            slots: vec![[0.0, -0.5, 0.0]],
+            held_goal: [0.0; 3],
+        }
+    }
+
+    /// The products after the chosen one are left out, so that it is last
+    /// along the chain; nothing for the box or a chosen last product.
+    #[test]
+    fn a_picking_decision_is_also_taught_without_the_later_products() {
+        let g = graph(5);
+        let Some(fewer) = without_later(&g, Some(2)) else {
+            panic!("products after the chosen one");
+        };
+        assert_eq!(fewer.nodes, g.nodes[..3].to_vec());
+        assert_eq!(
+            (fewer.slots, fewer.held_goal),
+            (g.slots.clone(), g.held_goal)
+        );
+        assert_eq!(without_later(&g, Some(4)), None);
+        assert_eq!(without_later(&g, None), None);
+    }
 }
