@@ -306,6 +306,27 @@ fn a_query_farther_out_than_any_taught_is_answered_as_the_nearest_taught() {
     }
 }
 
+/// A cell whose products wait 0.30 m from the base axis, below it
+/// (tests/cells/near_fold.pack). The policy kept the arm's shape from the
+/// stage's start down to the product, and no way up from that contact
+/// was free (the forearm folded into the base or the upper arm): the
+/// product was not packed. The stage is now planned again from its start
+/// by the expert's sub-goals, gripping with a shape the lift leaves
+/// freely: a fallback, and the package complete.
+#[test]
+fn a_grip_with_no_free_way_up_is_made_again_with_another_arm_shape() {
+    for scenario in ["near_fold_case1_n1/02", "near_fold_untaught/01"] {
+        let report = executes_file("tests/cells/near_fold.pack", scenario);
+        assert_eq!(report["complete"], true, "{report}");
+        let regripped = report["fallbacks"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .any(|f| f["stage"] == "picking" && f["subgoal"] == 3 && f["expert_from"] == 1);
+        assert!(regripped, "{report}");
+    }
+}
+
 /// A wide development cell (`generate --family wide --seed 109`): a 270
 /// mm deep carton and a 95 mm cup, where the expert lets go 10 cm up with
 /// wrist 3 a few millimetres from a wall, and the learned release 3 mm

@@ -12,6 +12,7 @@
 //! order stops the arm (a [`Violation`]).
 
 mod guards;
+mod regrip;
 mod steps;
 
 pub use steps::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps, tolerance};
@@ -378,6 +379,8 @@ impl<W: World> Learned<'_, W> {
         // The stage is planned to its end before the arm moves, each
         // sub-goal from where the one before leaves the arm.
         let mut start = leg_end(&pending).unwrap_or_else(|| self.station.world.observe().joints);
+        let (from, pending_legs, subgoals_before) =
+            (start, pending.len(), self.station.subgoals.len());
         let mut legs = pending;
         // The product as it will hang once gripped.
         let mut gripped: Option<Held> = None;
@@ -575,8 +578,36 @@ impl<W: World> Learned<'_, W> {
                         tip: goal,
                         suction: switch,
                     });
-                    let (route, expert) =
-                        self.fall_back(k, start, target, &plan.expert, load, ceiling)?;
+                    let fell = self.fall_back(k, start, target, &plan.expert, load, ceiling);
+                    let (route, expert) = match fell {
+                        Ok(found) => found,
+                        // No way up from the contact reached: the stage
+                        // again from its start, gripping with a shape
+                        // the lift leaves freely.
+                        Err(why) if regrip::lift_blocked(plan, k, &why) && !self.station.late() => {
+                            let Some(regripped) = self.regrip(plan, from) else {
+                                return Err(why);
+                            };
+                            let elapsed = self.station.spend(k + 1, started)?;
+                            self.station.timing.subgoal(kind, elapsed * 1e6);
+                            legs.truncate(pending_legs);
+                            self.station.subgoals.truncate(subgoals_before);
+                            for (i, (leg, end)) in regripped.into_iter().enumerate() {
+                                goals[i] = plan.expert[i].tip;
+                                tips[i] = self.station.tip(&end);
+                                self.station.subgoals.push(tips[i]);
+                                legs.push(leg);
+                            }
+                            if let Some(f) = self.fallbacks.last_mut()
+                                && f.product == plan.product
+                                && f.stage == plan.stage
+                            {
+                                f.expert_from = Some(1);
+                            }
+                            break;
+                        }
+                        Err(why) => return Err(why),
+                    };
                     if expert {
                         goals[k] = plan.expert[k].tip;
                         if let Some(f) = self.fallbacks.last_mut()
