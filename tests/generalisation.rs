@@ -327,6 +327,31 @@ fn a_grip_with_no_free_way_up_is_made_again_with_another_arm_shape() {
     }
 }
 
+/// A cell whose products wait 0.29 m from the base axis
+/// (tests/cells/near_flip.pack). The expert solved each sub-goal nearest
+/// the one before: over one product the contact nearest the hover had
+/// the wrist flipped, and the straight descent to it swung the cup into
+/// the neighbouring product (93 of the cell's 150 demonstrations could
+/// not be replayed). The stage is now solved again from the contact's
+/// shape.
+#[test]
+fn the_expert_grips_a_product_near_the_base_with_a_shape_it_can_reach_straight_down() {
+    for scenario in ["near_flip_case1_n/03", "near_flip_untaught/05"] {
+        let out = packwright(&[
+            "execute",
+            "tests/cells/near_flip.pack",
+            "--scenario",
+            scenario,
+            "--planner",
+            "expert",
+            "--json",
+        ]);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+        let report = json(&out);
+        assert_eq!(report["complete"], true, "{report}");
+    }
+}
+
 /// A wide development cell (`generate --family wide --seed 109`): a 270
 /// mm deep carton and a 95 mm cup, where the expert lets go 10 cm up with
 /// wrist 3 a few millimetres from a wall, and the learned release 3 mm

@@ -75,6 +75,60 @@ impl<W: World> Scripted<'_, W> {
         Ok(out)
     }
 
+    /// The picking sub-goals solved from the contact's arm shape
+    /// ([`Station::grip`]), timed as the hover's, the contact's and the
+    /// lift's planning (the search in the first).
+    fn grip_stage(
+        &mut self,
+        from: Joints,
+        goals: &[SubGoal; 3],
+        yaw: f64,
+        loads: [Load; 3],
+        lifting: &Held,
+    ) -> Option<Vec<Planned>> {
+        let started = self.station.begin();
+        let [free, guarded, _] = loads;
+        let guarded = guarded.guarded(self.station.task.cell.descent);
+        let solved = self
+            .station
+            .grip(goals, &from, yaw, [free, guarded], &|_| lifting.clone());
+        let took = self.station.spend(1, started).ok()?;
+        let solve_us = [took * 1e6, 0.0, 0.0];
+        Some(
+            solved?
+                .into_iter()
+                .zip(goals)
+                .zip(solve_us)
+                .map(|((solved, goal), solve_us)| Planned {
+                    goal: *goal,
+                    solved,
+                    ceiling: goal.tip[2],
+                    solve_us,
+                })
+                .collect(),
+        )
+    }
+
+    /// How much the run has recorded: the sub-goals reached and, when
+    /// demonstrations are recorded, their samples.
+    fn marks(&self) -> [usize; 3] {
+        let log = self.log.as_deref();
+        [
+            self.station.subgoals.len(),
+            log.map_or(0, |l| l.subgoals.len()),
+            log.map_or(0, |l| l.actions.len()),
+        ]
+    }
+
+    /// Forgets what a stage that was not sent recorded after `marks`.
+    fn rewind(&mut self, [subgoals, samples, actions]: [usize; 3]) {
+        self.station.subgoals.truncate(subgoals);
+        if let Some(log) = self.log.as_deref_mut() {
+            log.subgoals.truncate(samples);
+            log.actions.truncate(actions);
+        }
+    }
+
     /// Records one sub-goal and the actions along the way to it.
     fn record(
         &mut self,
@@ -199,7 +253,6 @@ impl<W: World> Scripted<'_, W> {
         let lifting = gripped.clone().leaving_support();
         let picking_loads = [free, free, Load::holding(&lifting)];
         let from = self.station.backup_end().unwrap_or(obs.joints);
-        let plan = self.plan_stage(from, &picking, yaw, picking_loads)?;
         let pick = StageInfo {
             stage: Stage::Picking,
             feature: centre,
@@ -209,7 +262,25 @@ impl<W: World> Scripted<'_, W> {
         // The back-up before is sent with the hover, and the lift with the
         // carry, blended into them.
         let backup = self.station.take_backup();
-        let lift = self.run_stage(plan, yaw, picking_loads, Some(pick), backup, true)?;
+        let marks = self.marks();
+        let lift = match self
+            .plan_stage(from, &picking, yaw, picking_loads)
+            .and_then(|plan| {
+                self.run_stage(plan, yaw, picking_loads, Some(pick), backup.clone(), true)
+            }) {
+            Ok(lift) => lift,
+            // No free way down onto the product or up from it with the arm's
+            // shape nearest where it is, and nothing sent yet: the stage
+            // again from the contact's shape ([`Station::grip`]).
+            Err(why) if gripping_blocked(&why) && self.station.clock.steps == 0 => {
+                self.rewind(marks);
+                let plan = self
+                    .grip_stage(from, &picking, yaw, picking_loads, &lifting)
+                    .ok_or(why)?;
+                self.run_stage(plan, yaw, picking_loads, Some(pick), backup, true)?
+            }
+            Err(why) => return Err(why),
+        };
 
         let obs = self.station.world.observe();
         let held = gripped;
@@ -247,6 +318,18 @@ impl<W: World> Scripted<'_, W> {
         // Kept, to be sent with the next product's hover.
         self.run_stage(plan, 0.0, [left; 3], None, Vec::new(), true)
     }
+}
+
+/// Whether a picking stage's failure `why` can come from the arm's shape
+/// at the contact (no free way down onto the product or up from it)
+/// rather than from the budget or the smoother.
+fn gripping_blocked(why: &Failure) -> bool {
+    matches!(
+        why,
+        Failure::Unreachable { subgoal: 2 | 3, .. }
+            | Failure::NoPath { subgoal: 2 | 3 }
+            | Failure::WouldCollide { subgoal: 2 | 3, .. }
+    )
 }
 
 pub(super) fn run<W: World>(

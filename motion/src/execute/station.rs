@@ -436,6 +436,64 @@ impl<'a, W: World> Station<'a, W> {
             })
     }
 
+    /// A picking stage's sub-goals (hover, contact, lift) solved from the
+    /// contact's arm shape rather than from where the arm is: for each
+    /// free contact solution, nearest `from` first, the hover of the same
+    /// shape (the solution nearest the contact) and the lift from the
+    /// contact (carrying `held` gripped there), when the straight descent
+    /// and the lift are free. The shape nearest the arm can leave no free
+    /// way down or up: by a product close to the base the descent flips
+    /// the wrist through a neighbour, or every way up folds the forearm
+    /// into the base. The descent and the lift are kept, checked, with
+    /// their joints; the way to the hover is the caller's. `None` when no
+    /// shape does, or the sub-goal's budget runs out.
+    pub fn grip(
+        &self,
+        goals: &[SubGoal; 3],
+        from: &Joints,
+        yaw: f64,
+        loads: [Load; 2],
+        held: &dyn Fn(&Joints) -> Held,
+    ) -> Option<[Solved; 3]> {
+        let [hover, contact, lift] = goals;
+        let [free, guarded] = loads;
+        let point = |g: &SubGoal| Point3::new(g.tip[0], g.tip[1], g.tip[2]);
+        solutions(&self.checker, point(contact), yaw, from)
+            .into_iter()
+            .filter(|q| {
+                self.arm.within_limits(q)
+                    && self
+                        .checker
+                        .check(q, guarded.held, guarded.ignore)
+                        .is_none()
+            })
+            .take_while(|_| !self.late())
+            .find_map(|at| {
+                let gripped = held(&at);
+                let up = self
+                    .solve(lift, 3, &at, yaw, Load::holding(&gripped), lift.tip[2])
+                    .ok()?;
+                up.straight.as_ref().filter(|(start, _)| *start == at)?;
+                let over = reach(&self.checker, point(hover), yaw, &at, free)?;
+                let down = checked_samples(self.arm, &self.checker, over, &[at], guarded).ok()?;
+                let down = Route {
+                    waypoints: vec![at],
+                    samples: down,
+                };
+                Some([
+                    Solved {
+                        joints: over,
+                        straight: None,
+                    },
+                    Solved {
+                        joints: at,
+                        straight: Some((over, down)),
+                    },
+                    up,
+                ])
+            })
+    }
+
     /// The checked commands from `from` to `to` for sub-goal `k`.
     ///
     /// Both ways first try the straight joint-space motion and, when its

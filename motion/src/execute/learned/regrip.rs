@@ -5,16 +5,16 @@
 //! solving the contact by inverse kinematics, grips with another shape.
 //! When the lift from the learned contact fails, the picking stage is
 //! planned again from its start by the expert's sub-goals, with the
-//! first contact shape (nearest the start first) from which the lift
-//! is free.
+//! first contact shape (nearest the start first) from which the descent
+//! and the lift are free (`Station::grip`, which the expert and
+//! RRT-Connect use alike).
 //!
 //! Invariant: every route returned is checked as it will be sent, with
 //! the load of its leg; nothing is sent here.
 
 use super::{Learned, StagePlan};
-use crate::execute::station::{Connect, Leg, Load, reach, solutions};
-use crate::expert::{SubGoal, schedule};
-use nalgebra::Point3;
+use crate::execute::station::{Connect, Leg, Load};
+use crate::expert::schedule;
 use packwright_interface::World;
 use packwright_interface::outcome::{Failure, Stage};
 use packwright_kinematics::Joints;
@@ -32,43 +32,31 @@ pub(super) fn lift_blocked(plan: &StagePlan, k: usize, why: &Failure) -> bool {
 }
 
 impl<W: World> Learned<'_, W> {
-    /// The picking stage `plan` from `from` by the expert's sub-goals: the
+    /// The picking stage `plan` from `from` by the expert's sub-goals
+    /// ([`Station::grip`](crate::execute::station::Station::grip)): the
     /// hover (RRT-Connect from `from`), the guarded descent onto the
-    /// product and the lift, each leg with the joints it ends at; gripping
-    /// with the first free contact shape, nearest `from` first, whose
-    /// lift is free and whose hover of the same shape is reached. `None`
-    /// when no shape does, or the sub-goal's budget runs out.
+    /// product and the lift, each leg with the joints it ends at. `None`
+    /// when no contact shape has a free way down and up, or the hover of
+    /// that shape is not reached.
     pub(super) fn regrip(&self, plan: &StagePlan, from: Joints) -> Option<[(Leg, Joints); 3]> {
         let s = &self.station;
         let (size, top) = (plan.gripped?, plan.contact?);
-        let [hover, contact, lift] = &plan.expert;
         let [over_switch, contact_switch, lift_switch] = schedule(Stage::Picking);
         let free = plan.load;
         let guarded = free.guarded(s.task.cell.descent);
-        let point = |g: &SubGoal| Point3::new(g.tip[0], g.tip[1], g.tip[2]);
-        solutions(&s.checker, point(contact), 0.0, &from)
-            .into_iter()
-            .filter(|q| {
-                s.arm.within_limits(q) && s.checker.check(q, guarded.held, guarded.ignore).is_none()
-            })
-            .take_while(|_| !s.late())
-            .find_map(|at| {
-                let held = self.gripped_at(&at, plan, size, top);
-                let carrying = Load::holding(&held);
-                let solved = s.solve(lift, 3, &at, 0.0, carrying, lift.tip[2]).ok()?;
-                let (raised, up) = s
-                    .route_solved(Connect::Straight, 3, at, solved, 0.0, carrying)
-                    .ok()?;
-                let over = reach(&s.checker, point(hover), 0.0, &at, free)?;
-                let down = s.checked(2, over, &[at], guarded).ok()?;
-                let to = s
-                    .route(Connect::Rrt { seed: self.seed }, 1, from, over, free)
-                    .ok()?;
-                Some([
-                    (Leg::new(to, over_switch, free), over),
-                    (Leg::new(down, contact_switch, guarded), at),
-                    (Leg::new(up, lift_switch, carrying), raised),
-                ])
-            })
+        let held = |at: &Joints| self.gripped_at(at, plan, size, top);
+        let [over, at, up] = s.grip(&plan.expert, &from, 0.0, [free, guarded], &held)?;
+        let gripped = held(&at.joints);
+        let carrying = Load::holding(&gripped);
+        let how = Connect::Rrt { seed: self.seed };
+        let over = over.joints;
+        let to = s.route(how, 1, from, over, free).ok()?;
+        let (at, down) = s.route_solved(how, 2, over, at, 0.0, guarded).ok()?;
+        let (raised, up) = s.route_solved(how, 3, at, up, 0.0, carrying).ok()?;
+        Some([
+            (Leg::new(to, over_switch, free), over),
+            (Leg::new(down, contact_switch, guarded), at),
+            (Leg::new(up, lift_switch, carrying), raised),
+        ])
     }
 }
