@@ -475,11 +475,7 @@ impl<'a, W: World> Station<'a, W> {
                     .ok()?;
                 up.straight.as_ref().filter(|(start, _)| *start == at)?;
                 let over = reach(&self.checker, point(hover), yaw, &at, free)?;
-                let down = checked_samples(self.arm, &self.checker, over, &[at], guarded).ok()?;
-                let down = Route {
-                    waypoints: vec![at],
-                    samples: down,
-                };
+                let down = self.checked(2, over, &[at], guarded).ok()?;
                 Some([
                     Solved {
                         joints: over,
