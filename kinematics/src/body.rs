@@ -10,7 +10,7 @@
 //! conversion from the robot model's f64 nalgebra types.
 
 use crate::{Arm, DOF, Joints, Shape};
-use nalgebra::{Isometry3, Point3, Vector3};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use packwright_interface::scene::CellScene;
 use packwright_interface::world::Body;
 use parry3d::math::{Pose, Vector};
@@ -99,6 +99,28 @@ pub fn arm_parts(arm: &Arm, suction: f64, padding: f64) -> Vec<ArmPart> {
                         shape: SharedShape::cuboid(h.x as f32, h.y as f32, h.z as f32),
                     }
                 }
+                Shape::Cylinder { a, b, radius } => {
+                    // parry's cylinders stand along their y axis; grown by
+                    // `padding` all round (edges rounded).
+                    let axis = b - a;
+                    let turn = UnitQuaternion::rotation_between(&Vector3::y(), &axis)
+                        .unwrap_or_else(|| {
+                            UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0)
+                        });
+                    let half = (axis.norm() / 2.0) as f32;
+                    ArmPart {
+                        part: i,
+                        local: Isometry3::from_parts(
+                            Translation3::from(a.coords + axis / 2.0),
+                            turn,
+                        ),
+                        shape: if padding > 0.0 {
+                            SharedShape::round_cylinder(half, *radius as f32, padding as f32)
+                        } else {
+                            SharedShape::cylinder(half, *radius as f32)
+                        },
+                    }
+                }
             });
         }
     }
@@ -127,7 +149,9 @@ pub fn wrist_around_tool(arm: &Arm) -> Option<(f64, f64)> {
     let to_flange = arm.flange.inverse();
     // Each shape's points (in the flange frame) and the radius round them.
     let points = link.shapes.iter().flat_map(|s| match s {
-        Shape::Capsule { a, b, radius } => vec![(to_flange * a, *radius), (to_flange * b, *radius)],
+        Shape::Capsule { a, b, radius } | Shape::Cylinder { a, b, radius } => {
+            vec![(to_flange * a, *radius), (to_flange * b, *radius)]
+        }
         Shape::Cuboid { pose, half } => (0..8)
             .map(|i| {
                 let corner = Point3::new(

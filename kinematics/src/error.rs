@@ -58,6 +58,15 @@ pub enum UrdfError {
     },
     #[error("robot description: joint `{joint}` needs a <limit> with a positive finite velocity")]
     Velocity { joint: String },
+    /// A collision mesh that cannot be read or used.
+    #[error(
+        "robot description: link `{link}`: collision mesh `{file}`: {reason}. packwright bounds each collision mesh by a box or a capsule, so it reads the file (STL or OBJ, relative to the description, `package://` through ROS_PACKAGE_PATH or the description's folders); or describe the link by <box>, <cylinder>, <sphere> or <capsule>"
+    )]
+    Mesh {
+        link: String,
+        file: String,
+        reason: String,
+    },
     #[error("robot description: {what} has a non-positive or non-finite size")]
     Size { what: String },
 }

@@ -218,9 +218,9 @@ impl Arm {
         if !(finite_iso(base) && finite_iso(flange) && near.iter().all(|v| v.is_finite())) {
             return out;
         }
-        // The last link's pose in the base frame.
+        // The last link's pose in the base frame, then in the DH base frame.
         let target = base.inverse() * flange;
-        let last = target * self.flange.inverse();
+        let last = g.mount.inverse() * target * self.flange.inverse();
         for (slot, raw) in out.iter_mut().zip(closed_form::solve(g, &last, near)) {
             *slot = raw
                 .and_then(|q| wrap_all(&q, near, limits))

@@ -10,12 +10,13 @@
 pub mod body;
 mod error;
 mod kinematics;
+mod mesh;
 mod urdf;
 
 pub use error::UrdfError;
 pub use kinematics::*;
 pub use packwright_interface::joints::{DOF, Joints, Limits};
-pub use urdf::{DEFAULT_ACCELERATION, DEFAULT_JERK, from_urdf};
+pub use urdf::{DEFAULT_ACCELERATION, DEFAULT_JERK, MeshReader, from_urdf, from_urdf_with};
 
 use nalgebra::{Isometry3, Point3, Unit, Vector3};
 
@@ -33,6 +34,13 @@ pub enum Shape {
         pose: Isometry3<f64>,
         half: Vector3<f64>,
     },
+    /// A cylinder of `radius` between the centres `a` and `b` of its flat
+    /// ends: a collision mesh's bound (`mesh.rs`), a housing round a joint.
+    Cylinder {
+        a: Point3<f64>,
+        b: Point3<f64>,
+        radius: f64,
+    },
 }
 
 /// One rigid link and its collision shapes.
@@ -43,9 +51,17 @@ pub struct Link {
 }
 
 /// The DH lengths of a Universal Robots arm (metres), which admit a
-/// closed-form inverse kinematics.
+/// closed-form inverse kinematics, and how the arm is mounted.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct UrGeometry {
+    /// The DH base frame in the root link's frame: the base joint's origin
+    /// is `mount · Tz(d1)`. The identity when the root is the DH base
+    /// frame (the built-in UR10); ROS descriptions turn it half a turn
+    /// about z (`base_link` faces the other way to the controller's base).
+    pub mount: Isometry3<f64>,
+    /// The mount's turn about z (radians): the DH base frame's heading at
+    /// a base joint of 0 ([`Arm::policy_joints`]).
+    pub heading: f64,
     pub d1: f64,
     pub a2: f64,
     pub a3: f64,
@@ -84,6 +100,29 @@ impl Arm {
             // The embedded file is tested; this cannot happen in a release.
             Err(e) => unreachable!("the built-in UR10 description is invalid: {e}"),
         }
+    }
+
+    /// What the dynamics policy reads of joints `q`: the base joint as the
+    /// heading of the arm's DH frame (so that a description whose root is
+    /// turned, as ROS's `base_link` is, reads as the built-in UR10 does),
+    /// then the shoulder and the elbow.
+    pub fn policy_joints(&self, q: &Joints) -> [f64; 3] {
+        [q[0] + self.heading(), q[1], q[2]]
+    }
+
+    /// The heading of the arm's DH base frame at a base joint of 0: the
+    /// mount's turn ([`UrGeometry::heading`]), 0 for other arms.
+    pub fn heading(&self) -> f64 {
+        self.ur.as_ref().map_or(0.0, |g| g.heading)
+    }
+
+    /// Joints `q` of the built-in UR10's convention (a pose named by its
+    /// joints, such as the usual "ready" pose) in this arm's: the base
+    /// joint less the mount's turn.
+    pub fn from_ur_convention(&self, q: &Joints) -> Joints {
+        let mut out = *q;
+        out[0] -= self.heading();
+        out
     }
 
     pub fn within_limits(&self, q: &Joints) -> bool {

@@ -20,7 +20,7 @@
 //! boxes become [`Shape::Cuboid`]s. Meshes are ignored: a link described by
 //! meshes only has no shapes and is not collision-checked.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_PI_2, TAU};
 
 use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
@@ -28,6 +28,11 @@ use urdf_rs::{Geometry, JointType, Pose};
 
 use super::{Arm, DOF, Limits, Link, Shape, UrGeometry};
 use crate::error::UrdfError;
+use crate::mesh;
+
+/// Reads a collision mesh: its `filename` as the description writes it,
+/// to the file's bytes, or a short reason why not.
+pub type MeshReader<'a> = dyn Fn(&str) -> Result<Vec<u8>, String> + 'a;
 
 /// Acceleration limit (rad/s²) of a joint whose description gives none.
 pub const DEFAULT_ACCELERATION: f64 = 2.5;
@@ -37,8 +42,18 @@ pub const DEFAULT_JERK: f64 = 10.0;
 const UR_TOLERANCE: f64 = 1e-6;
 
 /// Reads a 6-axis arm from URDF text. See the module documentation for what
-/// is accepted.
+/// is accepted. A collision mesh is refused: its file cannot be read
+/// here ([`from_urdf_with`] reads them).
 pub fn from_urdf(text: &str) -> Result<Arm, UrdfError> {
+    from_urdf_with(text, &|_| Err("no mesh files are read here".to_owned()))
+}
+
+/// [`from_urdf`], reading collision meshes through `meshes` (a mesh
+/// `filename` as the description writes it, such as
+/// `package://ur_description/meshes/ur10/collision/base.stl`, to its bytes
+/// or the reason why not): the caller resolves and reads files, this
+/// crate does no IO.
+pub fn from_urdf_with(text: &str, meshes: &MeshReader<'_>) -> Result<Arm, UrdfError> {
     let robot = urdf_rs::read_from_string(text).map_err(|e| UrdfError::Parse {
         reason: e.to_string(),
     })?;
@@ -84,27 +99,112 @@ pub fn from_urdf(text: &str) -> Result<Arm, UrdfError> {
         }
     };
 
-    let mut chain = Chain::new(root, links[root])?;
-    let mut current = root;
-    while let Some(next) = children.get(current) {
-        let joint = match next.as_slice() {
-            [joint] => *joint,
-            [] => break,
-            many => {
-                return Err(UrdfError::Branches {
-                    link: current.to_owned(),
-                    joints: many.iter().map(|j| j.name.clone()).collect(),
-                });
-            }
-        };
-        current = &joint.child.link;
-        chain.add(&robot.name, joint, links[current])?;
+    let joints_to = |end: &str| path_to(&has_parent, &robot.joints, end);
+    let path = chain_path(&robot, root, &children, &joints_to)?;
+    let on_path: HashSet<&str> = path.iter().map(|j| j.name.as_str()).collect();
+
+    let mut chain = Chain::new(root, links[root], meshes)?;
+    chain.fold_side(&robot.name, root, &children, &links, &on_path)?;
+    for joint in &path {
+        chain.add(&robot.name, joint, links[joint.child.link.as_str()])?;
+        chain.fold_side(&robot.name, &joint.child.link, &children, &links, &on_path)?;
     }
     chain.finish(&robot.name)
 }
 
+/// Whether a joint moves (anything but `fixed`).
+fn moves(joint: &urdf_rs::Joint) -> bool {
+    joint.joint_type != JointType::Fixed
+}
+
+/// The joints from the root down to link `end`, root first (the tree has
+/// one root and every link one parent, checked before).
+fn path_to<'a>(
+    parent_joint: &HashMap<&str, &str>,
+    joints: &'a [urdf_rs::Joint],
+    end: &str,
+) -> Vec<&'a urdf_rs::Joint> {
+    let by_name: HashMap<&str, &urdf_rs::Joint> =
+        joints.iter().map(|j| (j.name.as_str(), j)).collect();
+    let mut path = Vec::new();
+    let mut link = end;
+    while let Some(joint) = parent_joint.get(link).and_then(|j| by_name.get(j)) {
+        path.push(*joint);
+        link = &joint.parent.link;
+        if path.len() > joints.len() {
+            break; // a loop; refused before, kept finite here
+        }
+    }
+    path.reverse();
+    path
+}
+
+/// The chain the arm is: the joints from the root to its flange. The
+/// flange is `tool0` (else `flange`) when every moving joint lies on the
+/// way to it; else the end of the moving joints, followed down through
+/// fixed joints while they do not branch. Side branches hanging off the
+/// chain by fixed joints only (ROS descriptions' `base`, `ft_frame`, a
+/// camera bracket) are folded into the link they hang from by
+/// [`Chain::fold_side`]; a moving joint off the chain is refused.
+fn chain_path<'a>(
+    robot: &'a urdf_rs::Robot,
+    root: &'a str,
+    children: &HashMap<&str, Vec<&'a urdf_rs::Joint>>,
+    joints_to: &dyn Fn(&str) -> Vec<&'a urdf_rs::Joint>,
+) -> Result<Vec<&'a urdf_rs::Joint>, UrdfError> {
+    let moving: Vec<&urdf_rs::Joint> = robot.joints.iter().filter(|j| moves(j)).collect();
+    let covers = |path: &[&urdf_rs::Joint]| {
+        let names: HashSet<&str> = path.iter().map(|j| j.name.as_str()).collect();
+        moving.iter().all(|j| names.contains(j.name.as_str()))
+    };
+    for named in ["tool0", "flange"] {
+        if robot.links.iter().any(|l| l.name == named) {
+            let path = joints_to(named);
+            if covers(&path) {
+                return Ok(path);
+            }
+        }
+    }
+    // The deepest moving joint: the one with the most moving joints above.
+    let deepest = moving
+        .iter()
+        .max_by_key(|j| joints_to(&j.child.link).iter().filter(|j| moves(j)).count());
+    let mut path = match deepest {
+        Some(j) => joints_to(&j.child.link),
+        None => Vec::new(),
+    };
+    if let Some(off) = moving
+        .iter()
+        .find(|j| !path.iter().any(|p| p.name == j.name))
+    {
+        // Where the stray joint's way down leaves the chain.
+        let stray = joints_to(&off.child.link);
+        let shared = path
+            .iter()
+            .zip(&stray)
+            .take_while(|(a, b)| a.name == b.name)
+            .count();
+        let link = stray
+            .get(shared)
+            .map_or(String::new(), |j| j.parent.link.clone());
+        let joints = children
+            .get(link.as_str())
+            .map(|js| js.iter().map(|j| j.name.clone()).collect())
+            .unwrap_or_default();
+        return Err(UrdfError::Branches { link, joints });
+    }
+    // On through fixed joints while the chain does not branch.
+    let mut end = path.last().map_or(root, |j| j.child.link.as_str());
+    while let Some([joint]) = children.get(end).map(Vec::as_slice) {
+        path.push(joint);
+        end = &joint.child.link;
+    }
+    Ok(path)
+}
+
 /// The arm being assembled while walking the chain.
-struct Chain {
+struct Chain<'r> {
+    meshes: &'r MeshReader<'r>,
     origins: Vec<Isometry3<f64>>,
     axes: Vec<Unit<Vector3<f64>>>,
     limits: Vec<Limits>,
@@ -116,14 +216,19 @@ struct Chain {
     flange: Option<(u8, Isometry3<f64>)>,
 }
 
-impl Chain {
-    fn new(root: &str, link: &urdf_rs::Link) -> Result<Chain, UrdfError> {
+impl<'r> Chain<'r> {
+    fn new(
+        root: &str,
+        link: &urdf_rs::Link,
+        meshes: &'r MeshReader<'r>,
+    ) -> Result<Chain<'r>, UrdfError> {
         let mut base = Link {
             name: root.to_string(),
             shapes: Vec::new(),
         };
-        add_shapes(&mut base.shapes, &Isometry3::identity(), link)?;
+        add_shapes(&mut base.shapes, &Isometry3::identity(), link, meshes)?;
         Ok(Chain {
+            meshes,
             origins: Vec::new(),
             axes: Vec::new(),
             limits: Vec::new(),
@@ -144,7 +249,12 @@ impl Chain {
             JointType::Fixed => {
                 self.pending *= origin;
                 let last = self.links.len() - 1;
-                add_shapes(&mut self.links[last].shapes, &self.pending, child)?;
+                add_shapes(
+                    &mut self.links[last].shapes,
+                    &self.pending,
+                    child,
+                    self.meshes,
+                )?;
                 if self.origins.len() == DOF {
                     let priority = match child.name.as_str() {
                         "tool0" => 2,
@@ -178,7 +288,7 @@ impl Chain {
                     name: child.name.clone(),
                     shapes: Vec::new(),
                 };
-                add_shapes(&mut link.shapes, &Isometry3::identity(), child)?;
+                add_shapes(&mut link.shapes, &Isometry3::identity(), child, self.meshes)?;
                 self.links.push(link);
                 Ok(())
             }
@@ -191,6 +301,44 @@ impl Chain {
                 kind: format!("{other:?}"),
             }),
         }
+    }
+
+    /// Folds the shapes of the links hanging from chain link `at` by fixed
+    /// joints off the chain (and of everything below them, all fixed:
+    /// [`chain_path`] refused moving ones) into the moving link `at` is
+    /// bolted to, where they are.
+    fn fold_side(
+        &mut self,
+        robot: &str,
+        at: &str,
+        children: &HashMap<&str, Vec<&urdf_rs::Joint>>,
+        links: &HashMap<&str, &urdf_rs::Link>,
+        on_path: &HashSet<&str>,
+    ) -> Result<(), UrdfError> {
+        let mut stack: Vec<(&str, Isometry3<f64>)> = vec![(at, self.pending)];
+        let last = self.links.len() - 1;
+        let mut walked = 0;
+        while let Some((link, frame)) = stack.pop() {
+            for joint in children.get(link).into_iter().flatten() {
+                if on_path.contains(joint.name.as_str()) {
+                    continue;
+                }
+                walked += 1;
+                if moves(joint) || walked > links.len() {
+                    return Err(UrdfError::TooManyJoints {
+                        robot: robot.to_owned(),
+                        joint: joint.name.clone(),
+                    });
+                }
+                let child = &joint.child.link;
+                let place = frame * pose(&joint.origin, &format!("joint `{}`", joint.name))?;
+                if let Some(l) = links.get(child.as_str()) {
+                    add_shapes(&mut self.links[last].shapes, &place, l, self.meshes)?;
+                }
+                stack.push((child, place));
+            }
+        }
+        Ok(())
     }
 
     fn finish(self, robot: &str) -> Result<Arm, UrdfError> {
@@ -268,6 +416,7 @@ fn add_shapes(
     shapes: &mut Vec<Shape>,
     at: &Isometry3<f64>,
     link: &urdf_rs::Link,
+    meshes: &MeshReader<'_>,
 ) -> Result<(), UrdfError> {
     for c in &link.collision {
         let what = format!("a collision shape of link `{}`", link.name);
@@ -308,7 +457,23 @@ fn add_shapes(
                     half: Vector3::from(size.0) / 2.0,
                 });
             }
-            Geometry::Mesh { .. } => {}
+            Geometry::Mesh { filename, scale } => {
+                let refused = |reason: String| UrdfError::Mesh {
+                    link: link.name.clone(),
+                    file: filename.clone(),
+                    reason,
+                };
+                let scale = scale.map_or(Vector3::repeat(1.0), |s| Vector3::from(s.0));
+                if !scale.iter().all(|v| positive(*v)) {
+                    return Err(bad());
+                }
+                let bytes = meshes(filename).map_err(refused)?;
+                let mut read = mesh::read(filename, &bytes).map_err(refused)?;
+                for p in &mut read.points {
+                    p.coords.component_mul_assign(&scale);
+                }
+                shapes.extend(mesh::bounds(&read, &place));
+            }
         }
     }
     Ok(())
@@ -316,7 +481,8 @@ fn add_shapes(
 
 /// The UR geometry, when the joint origins are the DH encoding
 /// `Tx(a_{i-1}) Rx(alpha_{i-1}) Tz(d_i)` of a UR arm (alpha = π/2, 0, 0, π/2,
-/// -π/2; a1 = d2 = d3 = a4 = a5 = 0) with z axes, to within [`UR_TOLERANCE`].
+/// -π/2; a1 = d2 = d3 = a4 = a5 = 0) with z axes, to within [`UR_TOLERANCE`],
+/// after any fixed mount before the base joint (its origin `mount · Tz(d1)`).
 fn detect_ur(
     origins: &[Isometry3<f64>; DOF],
     axes: &[Unit<Vector3<f64>>; DOF],
@@ -327,6 +493,15 @@ fn detect_ur(
     {
         return None;
     }
+    // The base joint's origin is the mount, then d1 along its own z.
+    let first = origins[0];
+    let d1 = (first.rotation.inverse() * first.translation.vector).z;
+    let mount = Isometry3::from_parts(
+        Translation3::from(first.translation.vector - first.rotation * Vector3::new(0.0, 0.0, d1)),
+        first.rotation,
+    );
+    let mut origins = *origins;
+    origins[0] = Isometry3::translation(0.0, 0.0, d1);
     let alpha = [0.0, FRAC_PI_2, 0.0, 0.0, FRAC_PI_2, -FRAC_PI_2];
     for (o, al) in origins.iter().zip(alpha) {
         if o.rotation
@@ -350,7 +525,11 @@ fn detect_ur(
     let matches = (0..DOF).all(|i| (t(i) - expected[i]).norm() <= UR_TOLERANCE);
     // The closed form divides by a2, a3 and d6.
     let proper = [a2, a3, d6].iter().all(|v| v.abs() > UR_TOLERANCE);
+    let x = mount.rotation * Vector3::x();
+    let heading = if x.x == 1.0 { 0.0 } else { x.y.atan2(x.x) };
     (matches && proper).then_some(UrGeometry {
+        mount,
+        heading,
         d1,
         a2,
         a3,

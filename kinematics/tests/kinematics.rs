@@ -11,7 +11,7 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use packwright_kinematics::{
-    Arm, DOF, Joints, Shape, UR10_URDF, from_urdf, joint_distance, tool_down_pose,
+    Arm, DOF, Joints, Shape, UR10_URDF, from_urdf, from_urdf_with, joint_distance, tool_down_pose,
 };
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};

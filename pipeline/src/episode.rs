@@ -13,10 +13,11 @@ use packwright_interface::OrderTask;
 use packwright_interface::scene::{
     BoxSpec, CellScene, DEFAULT_MASS, Placement, ProductSpec, SlotSpec,
 };
-use packwright_kinematics::{Arm, Joints, from_urdf};
+use packwright_kinematics::{Arm, Joints, from_urdf_with};
 use packwright_motion::collision::ProductBody;
 use packwright_motion::execute;
 use packwright_sim::Simulator;
+use std::path::{Path, PathBuf};
 
 /// What `execute` needs: the arm, the task and where products start.
 pub struct Episode {
@@ -97,12 +98,48 @@ pub fn arm_of(robot: &RobotRecord) -> Result<Arm> {
                 path: path.into(),
                 reason: e.to_string(),
             })?;
-            from_urdf(&text).map_err(|source| PipelineError::Urdf {
+            let meshes = |filename: &str| read_mesh(Path::new(path), filename);
+            from_urdf_with(&text, &meshes).map_err(|why| PipelineError::Urdf {
                 path: path.clone(),
-                source,
+                why,
             })
         }
     }
+}
+
+/// The bytes of a collision mesh that the description at `urdf` names:
+/// `package://NAME/REST` from a folder NAME on `ROS_PACKAGE_PATH`, the
+/// description's folders or a folder NAME beside one of them; `file://`
+/// absolute; anything else relative to the description.
+fn read_mesh(urdf: &Path, filename: &str) -> Result<Vec<u8>, String> {
+    let dir = urdf.parent().unwrap_or(Path::new(""));
+    let file = if let Some(rest) = filename.strip_prefix("package://") {
+        let (package, inside) = rest.split_once('/').unwrap_or((rest, ""));
+        let roots = std::env::var_os("ROS_PACKAGE_PATH")
+            .map(|p| std::env::split_paths(&p).collect::<Vec<_>>())
+            .unwrap_or_default();
+        let mut candidates: Vec<PathBuf> =
+            roots.iter().map(|r| r.join(package).join(inside)).collect();
+        for up in dir.ancestors() {
+            if up.file_name().is_some_and(|n| n == package) {
+                candidates.push(up.join(inside));
+            }
+            candidates.push(up.join(package).join(inside));
+        }
+        candidates
+            .into_iter()
+            .find(|c| c.is_file())
+            .ok_or_else(|| {
+                format!(
+                    "package `{package}` not found on ROS_PACKAGE_PATH or beside the description"
+                )
+            })?
+    } else if let Some(absolute) = filename.strip_prefix("file://") {
+        PathBuf::from(absolute)
+    } else {
+        dir.join(filename)
+    };
+    std::fs::read(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))
 }
 
 /// The arm a cell packs with: its robot, with the cell's acceleration and

@@ -26,8 +26,10 @@ pub enum PipelineError {
         what: &'static str,
         name: String,
     },
-    #[error("{path}: {source}")]
-    Urdf { path: String, source: UrdfError },
+    /// A robot description that cannot be used (`why` is not a `source`:
+    /// it is said once, in this message).
+    #[error("{path}: {why}")]
+    Urdf { path: String, why: UrdfError },
     #[error("the arm cannot reach a start pose over the pending area of cell `{cell}`")]
     NoStartPose { cell: String },
     #[error(transparent)]

@@ -89,7 +89,7 @@ pub(super) fn validate(
         || SimError::Start { joints: *start },
     )?;
     let shapes_ok = arm.links.iter().flat_map(|l| &l.shapes).all(|s| match s {
-        LinkShape::Capsule { a, b, radius } => {
+        LinkShape::Capsule { a, b, radius } | LinkShape::Cylinder { a, b, radius } => {
             a.coords.iter().chain(b.coords.iter()).all(|v| coord(*v)) && size(*radius)
         }
         LinkShape::Cuboid { pose, half } => finite_pose(pose) && half.iter().all(|v| size(*v)),

@@ -92,7 +92,7 @@ impl<'a> ExpertCoach<'a> {
             m.target,
             m.tolerance,
             &mut |q, delta| {
-                let joints = f([q[0], q[1], q[2]]);
+                let joints = f(self.arm.policy_joints(q));
                 visited.push(ActionExample {
                     delta: f(delta),
                     joints,
@@ -178,7 +178,7 @@ mod tests {
                 let f = |v: [f64; 3]| v.map(|x| x as f32);
                 actions.push(ActionExample {
                     delta: f(std::array::from_fn(|j| target[j] - tip[j])),
-                    joints: f([q[0], q[1], q[2]]),
+                    joints: f(arm.policy_joints(&q)),
                     action: f(record::action(&q, &goal)),
                 });
             }

@@ -49,6 +49,7 @@ impl Arm {
             return None;
         }
         // The tip in the frame joint 2 turns in, then w = tip − P.
+        let base = base * g.mount;
         let tip = base.inverse() * tip;
         let v = tip.coords - Vector3::new(0.0, 0.0, g.d1);
         let (s1, c1) = from[0].sin_cos();
@@ -56,7 +57,7 @@ impl Arm {
         let in_plane = Vector3::new(u.x, u.z, -u.y);
         let w = in_plane - planar(g.a2, g.a3, from);
         Some(CupDownTip {
-            base: *base,
+            base,
             d1: g.d1,
             a2: g.a2,
             a3: g.a3,

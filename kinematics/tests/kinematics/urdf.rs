@@ -69,14 +69,37 @@ fn ur_geometry_is_detected_whatever_the_collision_shapes() {
     )
     .replace(
         r#"<cylinder radius="0.045" length="0.08"/>"#,
-        r#"<mesh filename="wrist3.stl"/>"#,
+        r#"<mesh filename="meshes/wrist3.obj" scale="0.001 0.001 0.001"/>"#,
     );
-    let arm = from_urdf(&boxes).unwrap();
+    // A collision mesh is read through the caller (this crate does no IO).
+    let msg = rejected(&boxes);
+    assert!(
+        msg.contains("link `wrist_3_link`: collision mesh `meshes/wrist3.obj`"),
+        "{msg}"
+    );
+    let asked = std::cell::RefCell::new(Vec::new());
+    let cube = "v -45 -45 -90\nv 45 -45 -90\nv 45 45 -90\nv -45 45 -90\nv -45 -45 -10\nv 45 -45 -10\nv 45 45 -10\nv -45 45 -10\nf 1 2 3 4\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    let arm = from_urdf_with(&boxes, &|name: &str| {
+        asked.borrow_mut().push(name.to_owned());
+        Ok(cube.as_bytes().to_vec())
+    })
+    .unwrap();
+    assert_eq!(asked.into_inner(), ["meshes/wrist3.obj"]);
     assert_eq!(arm.ur, Arm::ur10().ur);
     assert!(matches!(arm.links[2].shapes[1], Shape::Cuboid { .. }));
     assert!(matches!(arm.links[4].shapes[0], Shape::Capsule { a, b, .. } if a == b));
-    // Meshes are ignored: a mesh-only link has no shapes.
-    assert!(arm.links[6].shapes.is_empty());
+    // The mesh (in millimetres, scaled) is bounded by the box it is.
+    let Shape::Cuboid { pose, half } = &arm.links[6].shapes[0] else {
+        panic!("a box: {:?}", arm.links[6].shapes)
+    };
+    let mut h: Vec<f64> = half.iter().copied().collect();
+    h.sort_by(f64::total_cmp);
+    assert!(
+        (h[0] - 0.04).abs() < 1e-9 && (h[2] - 0.045).abs() < 1e-9,
+        "{h:?}"
+    );
+    // At the link's collision origin (z -0.05) plus the mesh's own -0.05.
+    assert!((pose.translation.vector - Vector3::new(0.0, 0.0, -0.1)).norm() < 1e-9);
 
     // Angles rounded within the 1e-6 tolerance still count: the closed form
     // then lands within ~3e-8 and a few damped least squares steps polish it.
@@ -113,7 +136,34 @@ fn fixed_joints_fold_into_origins_and_flange() {
            <joint name="flange_joint""#,
     );
     let arm = from_urdf(&text).unwrap();
-    assert!(arm.ur.is_none(), "the mount turns the base joint's origin");
+    let g = arm.ur.expect("a turned mount is still the UR geometry");
+    assert!(
+        (g.heading - 0.5).abs() < 1e-12 && (g.d1 - (D1 + 0.1)).abs() < 1e-12,
+        "{g:?}"
+    );
+    // The closed form solves the mounted arm: every branch it gives puts
+    // the flange where asked.
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut solved = 0;
+    for _ in 0..50 {
+        let q = tool_down_joints(&arm, &mut rng);
+        let target = arm.flange_pose(&base(), &q);
+        for sol in arm
+            .ur_ik_branches(&base(), &target, &q)
+            .into_iter()
+            .flatten()
+        {
+            let got = arm.flange_pose(&base(), &sol);
+            assert!((got.translation.vector - target.translation.vector).norm() < 1e-9);
+            assert!(got.rotation.angle_to(&target.rotation) < 1e-9);
+            solved += 1;
+        }
+    }
+    assert!(solved >= 50, "{solved}");
+    // The dynamics policy reads the base joint as the DH frame's heading.
+    let q = [0.3, -1.0, 1.2, 0.1, 0.4, -0.6];
+    assert!((arm.policy_joints(&q)[0] - 0.8).abs() < 1e-12);
+    assert_eq!(Arm::ur10().policy_joints(&q), [0.3, -1.0, 1.2]);
     assert_eq!(
         arm.flange,
         Isometry3::identity(),
@@ -190,8 +240,8 @@ fn unusable_descriptions_are_rejected_with_reasons() {
 
     let branch = edited(
         r#"<link name="tool0"/>"#,
-        r#"<link name="tool0"/><link name="camera"/>
-           <joint name="camera_joint" type="fixed"><parent link="forearm_link"/><child link="camera"/></joint>"#,
+        r#"<link name="tool0"/><link name="finger"/>
+           <joint name="finger_joint" type="revolute"><parent link="forearm_link"/><child link="finger"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" velocity="1"/></joint>"#,
     );
     let msg = rejected(&branch);
     assert!(msg.contains("branches at link `forearm_link`"), "{msg}");
@@ -216,4 +266,63 @@ fn unusable_descriptions_are_rejected_with_reasons() {
     );
     assert!(rejected(&two_roots).contains("several root links"));
     assert!(rejected("<robot name='x'>").contains("invalid URDF"));
+}
+
+#[test]
+fn side_branches_bolted_on_fold_into_their_link_as_ros_descriptions_need() {
+    // ROS's layout: a `world` root, `base_link` turned half a turn to the
+    // controller's base (`base_link_inertia`), a `base` frame and an
+    // `ft_frame` hanging off the chain, `flange` then `tool0`; and a camera
+    // bracket with a box bolted to the forearm.
+    let text = edited(
+        r#"<link name="tool0"/>"#,
+        r#"<link name="tool0"/><link name="world"/><link name="base"/><link name="ft_frame"/><link name="flange"/>
+           <link name="bracket"/>
+           <link name="camera"><collision><origin xyz="0 0.1 0"/><geometry><box size="0.05 0.05 0.05"/></geometry></collision></link>
+           <joint name="base_joint" type="fixed"><parent link="world"/><child link="base_link"/></joint>
+           <joint name="base_frame" type="fixed"><parent link="base_link"/><child link="base"/><origin rpy="0 0 3.141592653589793"/></joint>
+           <joint name="ft" type="fixed"><parent link="wrist_3_link"/><child link="ft_frame"/></joint>
+           <joint name="bracket_joint" type="fixed"><parent link="forearm_link"/><child link="bracket"/><origin xyz="-0.3 0 0"/></joint>
+           <joint name="camera_joint" type="fixed"><parent link="bracket"/><child link="camera"/></joint>"#,
+    )
+    .replace(
+        r#"<joint name="flange_joint" type="fixed">
+    <parent link="wrist_3_link"/>
+    <child link="tool0"/>"#,
+        r#"<joint name="to_flange" type="fixed"><parent link="wrist_3_link"/><child link="flange"/></joint>
+  <joint name="flange_joint" type="fixed">
+    <parent link="flange"/>
+    <child link="tool0"/>"#,
+    );
+    let arm = from_urdf(&text).unwrap();
+    let ur10 = Arm::ur10();
+    assert_eq!(arm.ur, ur10.ur);
+    assert_eq!(arm.flange, Isometry3::identity());
+    let forearm = &arm.links[3];
+    assert_eq!(forearm.shapes.len(), ur10.links[3].shapes.len() + 1);
+    let Some(Shape::Cuboid { pose, .. }) = forearm.shapes.last() else {
+        panic!("the camera's box on the forearm: {:?}", forearm.shapes)
+    };
+    assert!((pose.translation.vector - Vector3::new(-0.3, 0.1, 0.0)).norm() < 1e-12);
+
+    // A turned base_link: the same arm, its base joint half a turn on.
+    let turned = text.replace(
+        r#"<joint name="shoulder_pan_joint" type="revolute">
+    <parent link="base_link"/>"#,
+        r#"<joint name="inertia" type="fixed"><parent link="base_link"/><child link="base_link_inertia"/><origin rpy="0 0 3.141592653589793"/></joint>
+  <joint name="shoulder_pan_joint" type="revolute">
+    <parent link="base_link_inertia"/>"#,
+    )
+    .replace(r#"<link name="world"/>"#, r#"<link name="world"/><link name="base_link_inertia"/>"#);
+    let arm = from_urdf(&turned).unwrap();
+    let g = arm.ur.expect("UR geometry under a turned base_link");
+    assert!((g.heading.abs() - PI).abs() < 1e-9, "{g:?}");
+    let q = [0.3, -1.0, 1.2, 0.1, 0.4, -0.6];
+    let back = arm.from_ur_convention(&q);
+    let (a, b) = (
+        arm.flange_pose(&base(), &back),
+        ur10.flange_pose(&base(), &q),
+    );
+    assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
+    assert!(a.rotation.angle_to(&b.rotation) < 1e-9);
 }

@@ -55,7 +55,7 @@ impl Reachability {
             checker,
             cell: cell.clone(),
             start,
-            near: start.unwrap_or(READY),
+            near: start.unwrap_or(arm.from_ur_convention(&READY)),
         }
     }
 
@@ -70,7 +70,7 @@ impl Reachability {
             checker,
             cell: self.cell.clone(),
             start,
-            near: start.unwrap_or(READY),
+            near: start.unwrap_or(self.checker.arm().from_ur_convention(&READY)),
         }
     }
 

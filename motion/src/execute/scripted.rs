@@ -163,7 +163,7 @@ impl<W: World> Scripted<'_, W> {
             log.actions.push(ActionSample {
                 subgoal,
                 delta: std::array::from_fn(|j| target[j] - here[j]),
-                joints: [along[i][0], along[i][1], along[i][2]],
+                joints: station.arm.policy_joints(&along[i]),
                 action: record::action(&along[i], goal),
             });
         }

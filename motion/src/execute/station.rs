@@ -1233,7 +1233,8 @@ pub(crate) fn home_on(
 ) -> Option<Joints> {
     let top = home_tip(cell);
     let low = Point3::new(top[0], top[1], START_CHECK_HEIGHT);
-    let free: Vec<Joints> = solutions(checker, Point3::from(top), 0.0, &READY)
+    let ready = checker.arm().from_ur_convention(&READY);
+    let free: Vec<Joints> = solutions(checker, Point3::from(top), 0.0, &ready)
         .into_iter()
         .filter(|q| checker.check(q, None, None).is_none())
         .collect();

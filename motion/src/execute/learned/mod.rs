@@ -114,8 +114,8 @@ impl<W: World> Learned<'_, W> {
     /// The dynamics policy's action at joints `q` for `delta` (sub-goal −
     /// cup tip).
     fn act(&self, q: &Joints, delta: [f64; 3]) -> [f32; 3] {
-        self.policy
-            .action(f32s(delta), [q[0] as f32, q[1] as f32, q[2] as f32])
+        let joints = self.station.arm.policy_joints(q);
+        self.policy.action(f32s(delta), joints.map(|v| v as f32))
     }
 
     /// The dynamics policy's motion from `start` to `goal`: the checked
