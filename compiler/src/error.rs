@@ -28,6 +28,13 @@ pub enum Error {
         path: String,
         reason: String,
     },
+    /// A robot description that is read but cannot be used.
+    #[error("`{path}`: {reason}")]
+    RobotUnusable {
+        at: Loc,
+        path: String,
+        reason: String,
+    },
     #[error("duplicate {kind} `{name}`")]
     Duplicate {
         at: Loc,
@@ -277,6 +284,7 @@ impl Error {
             Error::UseMissing { .. } => "E010",
             Error::UseCycle { .. } => "E011",
             Error::RobotFileMissing { .. } => "E012",
+            Error::RobotUnusable { .. } => "E013",
             Error::Duplicate { .. } => "E020",
             Error::Unknown { .. } => "E021",
             Error::MissingStatement { .. } => "E022",
@@ -322,6 +330,7 @@ impl Error {
             | Error::UseMissing { at, .. }
             | Error::UseCycle { at, .. }
             | Error::RobotFileMissing { at, .. }
+            | Error::RobotUnusable { at, .. }
             | Error::Duplicate { at, .. }
             | Error::Unknown { at, .. }
             | Error::MissingStatement { at, .. }
@@ -367,6 +376,7 @@ impl Error {
             Error::UseMissing { .. } => "this file cannot be read".into(),
             Error::UseCycle { .. } => "this `use` closes the cycle".into(),
             Error::RobotFileMissing { .. } => "this file cannot be read".into(),
+            Error::RobotUnusable { .. } => "this description".into(),
             Error::Duplicate { .. } => "defined again here".into(),
             Error::Unknown { scope, .. } => format!("not found in {scope}"),
             Error::MissingStatement { .. } => "in this block".into(),
@@ -433,6 +443,7 @@ impl Error {
             Error::UseMissing { .. } => "`use` paths are relative to the file that uses them".into(),
             Error::UseCycle { .. } => "remove one of the `use` lines; a file cannot use itself, even through others".into(),
             Error::RobotFileMissing { .. } => "the path is relative to the file that names it".into(),
+            Error::RobotUnusable { .. } => "packwright drives one chain of six revolute joints from the root link to `tool0` (or `flange`); side branches bolted on by fixed joints are fine, collision meshes must be STL or OBJ files it can find".into(),
             Error::Duplicate { kind, .. } => format!("rename one of the two; every {kind} needs its own name"),
             Error::Unknown {
                 suggestion: Some(s), ..

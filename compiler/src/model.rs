@@ -108,6 +108,8 @@ pub struct Cell {
     pub name: String,
     pub loc: Loc,
     pub robot: RobotModel,
+    /// Where the `robot` statement is (its path, for a URDF).
+    pub robot_at: Loc,
     pub base: [f64; 3],
     pub suction: f64,
     pub pending: Rect,

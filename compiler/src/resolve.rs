@@ -318,6 +318,7 @@ impl Resolver<'_> {
         }
         let block = Loc::new(f, c.span);
         let mut robot = Once::new("robot");
+        let mut robot_path_at: Option<Loc> = None;
         let mut base = Once::new("base");
         let mut suction = Once::new("suction");
         let mut pending = Once::new("pending");
@@ -353,6 +354,7 @@ impl Resolver<'_> {
                         });
                         ok = false;
                     }
+                    robot_path_at.get_or_insert(Loc::new(f, path.span));
                     robot.set(
                         RobotModel::Urdf(full.display().to_string()),
                         sl,
@@ -515,6 +517,7 @@ impl Resolver<'_> {
         }
         let item = format!("cell `{}`", c.name.text);
         let e = &mut self.errors;
+        let robot_at = robot_path_at.or(robot.loc()).unwrap_or(at);
         let robot = robot.required(block, item.clone(), "robot ur10", e);
         let base = base.required(block, item.clone(), "base (0, 0, 0)", e);
         let suction = suction.required(block, item.clone(), "suction 100 mm", e);
@@ -558,6 +561,7 @@ impl Resolver<'_> {
             name: c.name.text.clone(),
             loc: at,
             robot,
+            robot_at,
             base,
             suction,
             pending,

@@ -22,7 +22,7 @@
 //! it: its footprint widened by the largest).
 
 use crate::error::Error;
-use crate::model::{Choose, Inventory, Model, Placed};
+use crate::model::{Choose, Inventory, Model, Placed, RobotModel};
 use crate::source::Loc;
 use crate::warning::Warning;
 use serde::Serialize;
@@ -143,6 +143,14 @@ pub struct Blocked {
 
 /// The robot's answers. Implementations must be deterministic.
 pub trait Workspace {
+    /// Why the robot description cell `cell` names cannot be used (a
+    /// URDF that is not one 6-axis chain, a collision mesh that cannot be
+    /// read), if it cannot; then nothing else is asked about the cell.
+    /// Without an answer (the default), every description is usable.
+    fn robot(&self, _m: &Model, _cell: usize) -> Option<String> {
+        None
+    }
+
     /// The start pose of cell `cell`, if it cannot be reached.
     fn start(&self, m: &Model, cell: usize) -> Option<Unreached>;
 
@@ -307,7 +315,13 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> (Vec<Error>, Vec<Warning>) {
     // The cells whose start the empty cell reaches.
     let mut started = BTreeSet::new();
     for (i, cell) in m.cells.iter().enumerate() {
-        if let Some(u) = ws.start(m, i) {
+        if let (RobotModel::Urdf(path), Some(reason)) = (&cell.robot, ws.robot(m, i)) {
+            a.errors.push(Error::RobotUnusable {
+                at: cell.robot_at,
+                path: path.clone(),
+                reason,
+            });
+        } else if let Some(u) = ws.start(m, i) {
             a.errors.push(Error::Unreachable {
                 at: cell.loc,
                 task: Task::Start {

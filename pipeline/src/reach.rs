@@ -6,6 +6,7 @@
 //! can reach.
 
 use crate::episode::{arm_of, scene_of};
+use crate::error::PipelineError;
 use packwright_compiler::Workspace;
 use packwright_compiler::emit::cell_record;
 use packwright_compiler::model::Model;
@@ -18,7 +19,8 @@ use std::collections::BTreeMap;
 
 /// The robot's workspace, one [`Reachability`] per cell, built when first
 /// asked. A cell whose arm cannot be built (an unreadable URDF, reported
-/// by the compiler itself) is not asked about.
+/// by the compiler itself; an unusable one, reported through
+/// [`Workspace::robot`]) is not asked about.
 #[derive(Default)]
 pub struct RobotWorkspace {
     cells: RefCell<BTreeMap<usize, Option<Reachability>>>,
@@ -78,6 +80,15 @@ fn pose(u: execute::Unreached) -> Unreached {
 }
 
 impl Workspace for RobotWorkspace {
+    fn robot(&self, m: &Model, cell: usize) -> Option<String> {
+        let record = cell_record(m.cells.get(cell)?);
+        // The compiler reports an unreadable file itself (E012).
+        match arm_of(&record.robot) {
+            Err(PipelineError::Urdf { why, .. }) => Some(why.to_string()),
+            _ => None,
+        }
+    }
+
     fn start(&self, m: &Model, cell: usize) -> Option<Unreached> {
         self.ask(m, cell, |r| {
             r.start().err().map(|tip| Unreached {
