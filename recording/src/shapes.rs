@@ -78,6 +78,17 @@ pub fn arm_bodies(arm: &Arm, suction: f64) -> ArmBodies {
             } else if let Some(link) = links.get_mut(part.link()) {
                 link.capsules.push(capsule);
             }
+        } else if let Some(c) = part.shape.as_cylinder()
+            && let Some(link) = links.get_mut(part.link())
+        {
+            // A mesh's cylinder (a joint housing), drawn as the capsule
+            // between its end faces' centres: Rerun draws capsules.
+            let end = |y: f32| part.local * Point3::new(0.0, f64::from(y), 0.0);
+            link.capsules.push(Capsule::between(
+                end(-c.half_height),
+                end(c.half_height),
+                c.radius.into(),
+            ));
         } else if let Some(c) = part.shape.as_cuboid()
             && let Some(link) = links.get_mut(part.link())
         {
