@@ -21,6 +21,13 @@ pub fn read_source(path: &Path) -> Result<String, String> {
         ErrorKind::InvalidData => "not UTF-8 text".to_owned(),
         _ => e.to_string(),
     };
+    if path.is_dir() {
+        return Err(if path.join("manifest.json").is_file() {
+            "a compiled directory, not a .pack file: give the .pack files it was compiled from (`train` and `show` read compiled directories)".to_owned()
+        } else {
+            "a directory, not a .pack file".to_owned()
+        });
+    }
     let file = fs::File::open(path).map_err(describe)?;
     let mut bytes = Vec::new();
     file.take(MAX_SOURCE_BYTES + 1)

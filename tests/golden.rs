@@ -237,6 +237,44 @@ fn exit_codes_and_json_lines() {
     let usage = packwright(&["check"]);
     assert_eq!(usage.status.code(), Some(2));
 
+    // A .pack file where a compiled directory is read, and the other way
+    // round: exit 2 and what to give instead.
+    for command in ["train", "show"] {
+        let mut args = vec![command, "orders/suites/teach.pack"];
+        if command == "train" {
+            args.extend(["-o", "no/such/out"]);
+        }
+        let out = packwright(&args);
+        assert_eq!(out.status.code(), Some(2), "{command}");
+        let said = text(&out.stderr);
+        assert!(
+            said.contains("not a compiled directory: compile it first"),
+            "{said}"
+        );
+    }
+    let dir = scratch("golden", "compiled_as_source");
+    let out = dir.join("out");
+    let compiled = packwright(&[
+        "compile",
+        "orders/suites/teach.pack",
+        "-o",
+        &out.display().to_string(),
+    ]);
+    assert_eq!(
+        compiled.status.code(),
+        Some(0),
+        "{}",
+        text(&compiled.stderr)
+    );
+    let given = packwright(&["eval", &out.display().to_string()]);
+    assert_eq!(given.status.code(), Some(2));
+    let said = text(&given.stderr);
+    assert!(
+        said.contains("a compiled directory, not a .pack file"),
+        "{said}"
+    );
+    let _ = fs::remove_dir_all(&dir);
+
     let json = packwright(&["check", "--json", "tests/cases/err/many_errors.pack"]);
     assert_eq!(json.status.code(), Some(1));
     let lines: Vec<serde_json::Value> = text(&json.stdout)

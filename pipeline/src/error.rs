@@ -20,6 +20,10 @@ pub enum PipelineError {
         field: String,
         problem: ArtifactProblem,
     },
+    /// A path given where a compiled directory is read (`train`, `show`)
+    /// that is not one.
+    #[error("{}: {what}", path.display())]
+    NotCompiled { path: PathBuf, what: NotCompiled },
     #[error("{file} has no {what} `{name}`")]
     Unknown {
         file: &'static str,
@@ -58,6 +62,22 @@ pub enum PipelineError {
     /// not in remote control (see `packwright_ur::UrError`).
     #[error(transparent)]
     Robot { source: packwright_ur::UrError },
+}
+
+/// Why a path is not a compiled directory.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
+pub enum NotCompiled {
+    /// A file (a `.pack` source, most likely).
+    #[error(
+        "a file, not a compiled directory: compile it first (`packwright compile FILE -o DIR`) and give DIR"
+    )]
+    File,
+    #[error("no such directory: give the directory `packwright compile … -o DIR` wrote")]
+    Missing,
+    #[error(
+        "not a compiled directory (no manifest.json): give the directory `packwright compile … -o DIR` wrote"
+    )]
+    NoManifest,
 }
 
 /// `, FIELD` after the file name, or nothing for a whole-file problem.

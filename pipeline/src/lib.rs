@@ -18,4 +18,4 @@ pub mod robot;
 pub mod stats;
 pub mod teach;
 
-pub use error::{PipelineError, Result};
+pub use error::{NotCompiled, PipelineError, Result};

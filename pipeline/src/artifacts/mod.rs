@@ -30,7 +30,7 @@ mod validate;
 
 pub use graphs::{GraphsFile, layout};
 
-use crate::error::{ArtifactProblem, PipelineError, Result};
+use crate::error::{ArtifactProblem, NotCompiled, PipelineError, Result};
 use field::Field;
 use packwright_compiler::artifact::{
     CombinationRecord, DemonstrationRecord, LabelsFile, Manifest, SCHEMA_VERSION, ScenariosFile,
@@ -87,6 +87,19 @@ impl CompiledDir {
     /// schema and version are reported before anything else about it, so
     /// a directory written by another version says so.
     pub fn read(dir: &Path) -> Result<CompiledDir> {
+        let not = |what| PipelineError::NotCompiled {
+            path: dir.to_path_buf(),
+            what,
+        };
+        if dir.is_file() {
+            return Err(not(NotCompiled::File));
+        }
+        if !dir.is_dir() {
+            return Err(not(NotCompiled::Missing));
+        }
+        if !dir.join(file::MANIFEST).is_file() {
+            return Err(not(NotCompiled::NoManifest));
+        }
         let manifest = read_artifact(&dir.join(file::MANIFEST), schema::MANIFEST)?;
         let labels = read_artifact(&dir.join(file::LABELS), schema::LABELS)?;
         let world = read_artifact(&dir.join(file::ORDERS), schema::ORDERS)?;
