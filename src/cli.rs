@@ -2,7 +2,7 @@
 //! documentation most users read: they say what each command does, what it
 //! writes, and how it exits.
 
-use clap::{Args, Parser, Subcommand};
+use clap::{ArgGroup, Args, Parser, Subcommand};
 use packwright_interface::PlannerKind;
 use std::path::PathBuf;
 
@@ -211,12 +211,13 @@ fn planner(s: &str) -> Result<PlannerKind, String> {
 }
 
 #[derive(Debug, Args)]
+#[command(group(ArgGroup::new("task").required(true).args(["order", "scenario"])))]
 pub struct ExecuteArgs {
     /// The .pack files that define the order (files they `use` are read too).
     #[arg(required = true, value_name = "FILE")]
     pub files: Vec<PathBuf>,
     /// The order to pack, with every product at its inventory position.
-    #[arg(long, value_name = "NAME", required_unless_present = "scenario")]
+    #[arg(long, value_name = "NAME")]
     pub order: Option<String>,
     /// A scenario instead: a `scenario` name, or a case of a `scenarios`
     /// suite such as `case1_3of5/007`.

@@ -39,7 +39,12 @@ pub fn read_source(path: &Path) -> Result<String, String> {
             MAX_SOURCE_BYTES >> 20
         ));
     }
-    String::from_utf8(bytes).map_err(|_| "not UTF-8 text".to_owned())
+    let text = String::from_utf8(bytes).map_err(|_| "not UTF-8 text".to_owned())?;
+    // A byte-order mark (some editors write one) is not part of the text.
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_owned(),
+        None => text,
+    })
 }
 
 /// Reads source files from disk (see [`read_source`]).
@@ -305,6 +310,28 @@ mod tests {
         let _ = fs::remove_dir_all(&dir);
         fs::create_dir_all(&dir).expect("scratch");
         dir
+    }
+
+    #[test]
+    fn a_source_read_without_its_byte_order_mark_and_a_directory_named() {
+        let d = scratch("bom");
+        let file = d.join("cell.pack");
+        fs::write(&file, "\u{feff}# a comment\nproduct A cube 50 mm\n").expect("written");
+        assert_eq!(
+            read_source(&file).expect("read"),
+            "# a comment\nproduct A cube 50 mm\n"
+        );
+        assert_eq!(
+            read_source(&d).unwrap_err(),
+            "a directory, not a .pack file"
+        );
+        fs::write(d.join("manifest.json"), "{}").expect("written");
+        assert!(
+            read_source(&d)
+                .unwrap_err()
+                .contains("a compiled directory")
+        );
+        let _ = fs::remove_dir_all(&d);
     }
 
     fn artifact(bytes: &str) -> Artifact {
