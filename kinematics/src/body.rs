@@ -252,6 +252,8 @@ pub fn touching_pairs(arm: &Arm, suction: f64) -> Vec<(usize, usize)> {
 }
 
 /// Whether two shapes intersect: parry's answer ([`exact_intersects`]).
+/// A pair with a cylinder (a collision mesh's bound) is first tried with
+/// the capsule round the cylinder, which can only say "apart".
 ///
 /// Two capsules (every arm part of the UR10) are first decided by the
 /// distance between their axis segments, computed in closed form (f64,
@@ -275,7 +277,44 @@ pub fn intersects(p1: &Pose, s1: &dyn ParryShape, p2: &Pose, s2: &dyn ParryShape
             _ => false,
         },
     };
-    !apart && exact_intersects(p1, s1, p2, s2)
+    !apart && !cylinder_apart(p1, s1, p2, s2) && exact_intersects(p1, s1, p2, s2)
+}
+
+/// The capsule round a cylinder (a collision mesh's bound): the same
+/// axis segment and radius (and rounded border) hold it. `None` for any
+/// other shape.
+fn enclosing_capsule(s: &dyn ParryShape) -> Option<Capsule> {
+    if let Some(c) = s.as_cylinder() {
+        return Some(Capsule::new_y(c.half_height, c.radius));
+    }
+    let c = s.as_round_cylinder()?;
+    Some(Capsule::new_y(
+        c.inner_shape.half_height,
+        c.inner_shape.radius + c.border_radius,
+    ))
+}
+
+/// Whether a pair with a cylinder is surely apart, by the capsule round
+/// it: capsules decided apart in closed form, or a capsule clear of a
+/// cuboid (apart round the cylinder is apart from it; anything else is
+/// left to parry).
+fn cylinder_apart(p1: &Pose, s1: &dyn ParryShape, p2: &Pose, s2: &dyn ParryShape) -> bool {
+    let (e1, e2) = (enclosing_capsule(s1), enclosing_capsule(s2));
+    if e1.is_none() && e2.is_none() {
+        return false;
+    }
+    let c1 = e1.as_ref().or(s1.as_capsule());
+    let c2 = e2.as_ref().or(s2.as_capsule());
+    match (c1, c2) {
+        (Some(a), Some(b)) => capsules_decided(p1, a, p2, b) == Some(false),
+        (Some(a), None) => s2
+            .as_cuboid()
+            .is_some_and(|b| capsule_clear_of_cuboid(p1, a, p2, b)),
+        (None, Some(b)) => s1
+            .as_cuboid()
+            .is_some_and(|a| capsule_clear_of_cuboid(p2, b, p1, a)),
+        (None, None) => false,
+    }
 }
 
 /// Whether two shapes intersect, by parry alone (GJK for capsules and

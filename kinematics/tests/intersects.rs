@@ -251,3 +251,49 @@ fn the_ur10_parts_get_parrys_answer_at_random_configurations() {
     }
     assert!(colliding > 1_000, "{colliding}");
 }
+
+fn random_cylinder(rng: &mut ChaCha8Rng) -> SharedShape {
+    let (half, radius) = (
+        rng.random_range(0.005..0.3_f32),
+        rng.random_range(0.01..0.1_f32),
+    );
+    if rng.random_bool(0.5) {
+        SharedShape::cylinder(half, radius)
+    } else {
+        SharedShape::round_cylinder(half, radius, rng.random_range(0.001..0.02_f32))
+    }
+}
+
+#[test]
+fn pairs_with_a_cylinder_get_parrys_answer() {
+    // A collision mesh's cylinder (plain, or grown by the padding) against
+    // capsules, cuboids and cylinders, in either order: the capsule round
+    // it only ever says "apart" where parry does.
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    let (mut hits, mut misses) = (0, 0);
+    for k in 0..20_000 {
+        let cylinder = random_cylinder(&mut rng);
+        let other = match k % 3 {
+            0 => random_capsule(&mut rng),
+            1 => random_cuboid(&mut rng),
+            _ => random_cylinder(&mut rng),
+        };
+        let (p1, p2) = (
+            pose(&random_pose(&mut rng, 0.25)),
+            pose(&random_pose(&mut rng, 0.25)),
+        );
+        let (s1, s2) = if k % 2 == 0 {
+            (&cylinder, &other)
+        } else {
+            (&other, &cylinder)
+        };
+        let fast = intersects(&p1, &**s1, &p2, &**s2);
+        assert_eq!(fast, exact_intersects(&p1, &**s1, &p2, &**s2), "case {k}");
+        if fast {
+            hits += 1;
+        } else {
+            misses += 1;
+        }
+    }
+    assert!(hits > 2_000 && misses > 2_000, "{hits} / {misses}");
+}
