@@ -1,11 +1,15 @@
 //! Reading an [`Arm`] from a URDF description.
 //!
-//! The description must be a single chain (no branches) from its root link
-//! through exactly [`DOF`] revolute or continuous joints; fixed joints may
-//! sit anywhere along it and are folded away (into the next joint's origin,
-//! into the flange, and their links' shapes into the moving link they are
-//! bolted to). The flange is the link named `tool0` (else `flange`) after
-//! the last moving joint, else the chain's last link.
+//! The arm is the chain from the root link to the link named `tool0` (else
+//! `flange`; else the end of the moving joints) through exactly [`DOF`]
+//! revolute or continuous joints; fixed joints may sit anywhere along it
+//! and are folded away (into the next joint's origin, into the flange, and
+//! their links' shapes into the moving link they are bolted to). Side
+//! branches hanging off the chain by fixed joints only (ROS descriptions'
+//! `base` and `ft_frame`, a bracket) are folded in the same way; a moving
+//! joint off the chain is refused. A fixed mount before the base joint
+//! (ROS's `base_link` turned half a turn) is kept in [`UrGeometry`] when
+//! the rest is the UR geometry.
 //!
 //! Limits: revolute joints need finite `lower < upper` and a positive
 //! `velocity`; continuous joints get ±2π. Acceleration and jerk come from the
@@ -17,8 +21,9 @@
 //! Collision: `<collision>` cylinders and capsules become [`Shape::Capsule`]s
 //! over their axis segment (a capsule contains its cylinder and overhangs
 //! each flat end by the radius), spheres become capsules of zero length,
-//! boxes become [`Shape::Cuboid`]s. Meshes are ignored: a link described by
-//! meshes only has no shapes and is not collision-checked.
+//! boxes become [`Shape::Cuboid`]s. A mesh is read through the caller's
+//! [`MeshReader`] (scaled by its `scale`) and bounded by the shapes of
+//! `mesh.rs`; [`from_urdf`], which reads no files, refuses meshes.
 
 use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_PI_2, TAU};
