@@ -151,7 +151,9 @@ const SLICES: usize = 64;
 /// counting [`PIECE_COST`] per piece.
 pub fn bounds(mesh: &Mesh, place: &Isometry3<f64>) -> Vec<Shape> {
     let whole = || bound(&mesh.points, place);
-    let Some((mean, axes)) = principal(&mesh.points) else {
+    // Without triangles (an OBJ of vertices alone) only the vertices' bound
+    // is sure to hold the mesh.
+    let Some((mean, axes)) = principal(&mesh.points).filter(|_| !mesh.triangles.is_empty()) else {
         return vec![whole()];
     };
     let along = |p: &Point3<f64>| (axes.inverse() * (p.coords - mean)).x;
@@ -200,14 +202,6 @@ pub fn bounds(mesh: &Mesh, place: &Isometry3<f64>) -> Vec<Shape> {
         }
     }
     // Least cost of the first j slices, and where its last run starts.
-    let run_of = |i: usize, j: usize| {
-        slices[i..j].iter().flatten().fold(
-            None,
-            |run: Option<(Vector3<f64>, Vector3<f64>)>, (a, b)| {
-                Some(run.map_or((*a, *b), |(c, d)| (c.inf(a), d.sup(b))))
-            },
-        )
-    };
     let box_cost = |run: Option<(Vector3<f64>, Vector3<f64>)>| {
         run.map_or(0.0, |(a, b)| {
             let size = b - a;
@@ -235,11 +229,14 @@ pub fn bounds(mesh: &Mesh, place: &Isometry3<f64>) -> Vec<Shape> {
     let mut j = SLICES;
     while j > 0 {
         let i = best[j].1;
-        if run_of(i, j).is_some() {
+        if slices[i..j].iter().any(Option::is_some) {
             let points: Vec<Point3<f64>> = clipped[i..j].iter().flatten().copied().collect();
             pieces.push(bound_also(&points, place, Some(&axes)));
         }
         j = i;
+    }
+    if pieces.is_empty() {
+        return vec![whole()];
     }
     pieces.reverse();
     pieces
@@ -494,6 +491,14 @@ mod tests {
                 ]
             })
             .collect()
+    }
+
+    #[test]
+    fn a_mesh_of_vertices_alone_is_bounded_round_them() {
+        let mesh = read("cloud.obj", b"v 0 0 0\nv 0.3 0 0\nv 0 0.1 0\nv 0 0 0.05\n").unwrap();
+        let shapes = bounds(&mesh, &Isometry3::identity());
+        assert_eq!(shapes.len(), 1);
+        assert!(mesh.points.iter().all(|p| inside(&shapes[0], p)));
     }
 
     #[test]
