@@ -249,12 +249,46 @@ impl Arm {
         if let Some(aimed) = numeric::aim_base(self, &target, near) {
             seeds.insert(0, aimed);
         }
-        let solutions = seeds.iter().filter_map(|seed| {
-            let q = numeric::solve(self, &target, seed, 200)?;
-            wrap_all(&q, near, &self.limits)
-                .and_then(|q| self.verified(&target, q, near, &self.limits))
-        });
-        nearest(solutions, near)
+        let solve = |seeds: &[Joints]| {
+            let solutions = seeds.iter().filter_map(|seed| {
+                let q = numeric::solve(self, &target, seed, 200)?;
+                wrap_all(&q, near, &self.limits)
+                    .and_then(|q| self.verified(&target, q, near, &self.limits))
+            });
+            nearest(solutions, near)
+        };
+        // Being local, the descent fails from a seed far from any solution
+        // (an arm whose joints `near` names poses of another convention,
+        // such as the UR "ready" pose): then from spread seeds, each aimed.
+        solve(&seeds).or_else(|| solve(&self.spread_seeds(&target)))
+    }
+
+    /// Seeds across the joint ranges for [`Arm::numeric_ik`]'s second try:
+    /// the middle of every range (within ±π), with the shoulder and the
+    /// elbow (joints 2 and 3) on a 5 × 5 grid over theirs and the wrist's
+    /// middle joint (5) at a quarter and three quarters of its range, the
+    /// base aimed at `target`; tried only where the first seeds failed.
+    fn spread_seeds(&self, target: &Isometry3<f64>) -> Vec<Joints> {
+        let at = |i: usize, share: f64| {
+            let l = &self.limits[i];
+            let (lo, hi) = (l.lower.max(-PI), l.upper.min(PI));
+            lo + share * (hi - lo)
+        };
+        let middle: Joints = std::array::from_fn(|i| at(i, 0.5));
+        let shares = [0.1, 0.3, 0.5, 0.7, 0.9];
+        let mut seeds = Vec::with_capacity(50);
+        for wrist in [0.25, 0.75] {
+            for a in shares {
+                for b in shares {
+                    let mut q = middle;
+                    q[1] = at(1, a);
+                    q[2] = at(2, b);
+                    q[4] = at(4, wrist);
+                    seeds.push(numeric::aim_base(self, target, &q).unwrap_or(q));
+                }
+            }
+        }
+        seeds
     }
 
     /// `q` if it puts the flange at `target` (base frame) within

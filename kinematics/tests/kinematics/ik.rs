@@ -229,3 +229,40 @@ fn a_non_dh_arm_is_solved_numerically() {
         assert!(got.rotation.angle_to(&target.rotation) < 1e-9);
     }
 }
+
+/// A generic 6-axis arm (shoulder and elbow about y, a roll-pitch-roll
+/// wrist, the tool along the last roll axis): not the UR geometry.
+const GENERIC_6R: &str = r#"<?xml version="1.0"?>
+<robot name="generic6">
+  <link name="base_link"/><link name="l1"/><link name="l2"/><link name="l3"/>
+  <link name="l4"/><link name="l5"/><link name="l6"/><link name="tool0"/>
+  <joint name="j1" type="revolute"><parent link="base_link"/><child link="l1"/><origin xyz="0 0 0.4"/><axis xyz="0 0 1"/><limit lower="-3.14" upper="3.14" velocity="2"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.1 0 0"/><axis xyz="0 1 0"/><limit lower="-1.8" upper="1.8" velocity="2"/></joint>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.6"/><axis xyz="0 1 0"/><limit lower="-3.0" upper="1.2" velocity="2"/></joint>
+  <joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/><origin xyz="0.15 0 0.1"/><axis xyz="1 0 0"/><limit lower="-3.14" upper="3.14" velocity="3"/></joint>
+  <joint name="j5" type="revolute"><parent link="l4"/><child link="l5"/><origin xyz="0.45 0 0"/><axis xyz="0 1 0"/><limit lower="-2.1" upper="2.1" velocity="3"/></joint>
+  <joint name="j6" type="revolute"><parent link="l5"/><child link="l6"/><origin xyz="0.1 0 0"/><axis xyz="1 0 0"/><limit lower="-6.28" upper="6.28" velocity="4"/></joint>
+  <joint name="flange" type="fixed"><parent link="l6"/><child link="tool0"/><origin rpy="0 1.5707963267948966 0"/></joint>
+</robot>"#;
+
+#[test]
+fn a_generic_arm_is_solved_from_a_pose_of_another_convention() {
+    // The start pose's search begins at the UR "ready" joints, which on
+    // this arm are far from any solution (the elbow beyond its limit): the
+    // local descent alone fails there; the spread seeds find the pose.
+    let arm = from_urdf(GENERIC_6R).unwrap();
+    assert!(arm.ur.is_none());
+    let ready = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
+    let origin = Isometry3::identity();
+    for tip in [
+        Point3::new(0.65, -0.3, 0.35),
+        Point3::new(0.5, -0.2, 0.15),
+        Point3::new(0.0, 0.6, 0.2),
+    ] {
+        let q = arm
+            .yaw_free_tool_down_ik(&origin, tip, SUCTION, &ready)
+            .unwrap_or_else(|| panic!("{tip} reachable"));
+        assert!(arm.within_limits(&q));
+        assert!((arm.tool_tip(&origin, &q, SUCTION) - tip).norm() < 1e-6);
+    }
+}
