@@ -206,6 +206,16 @@ pub struct DrawArgs {
     pub output: Option<PathBuf>,
 }
 
+/// A count of at least 1 (`eval --limit 0` would measure nothing and
+/// print an empty table).
+fn at_least_one(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(0) => Err("must be at least 1".to_owned()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 fn planner(s: &str) -> Result<PlannerKind, String> {
     s.parse()
 }
@@ -352,8 +362,8 @@ pub struct EvalArgs {
     /// Only the reasoner's decisions, no motion (fast).
     #[arg(long)]
     pub reasoner_only: bool,
-    /// The first N scenarios of each suite only.
-    #[arg(long, value_name = "N")]
+    /// The first N scenarios of each suite only (at least 1).
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
     pub limit: Option<usize>,
     /// Seed of RRT-Connect (scenario i uses seed + i): a run is
     /// reproducible from it.
@@ -501,4 +511,18 @@ pub enum TaughtOrder {
     Descending,
     /// A priority list other than the inventory order.
     Listed,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_count_is_at_least_one() {
+        assert_eq!(at_least_one("3"), Ok(3));
+        assert_eq!(at_least_one("0"), Err("must be at least 1".to_owned()));
+        assert!(at_least_one("-1").is_err());
+        assert!(Cli::try_parse_from(["packwright", "eval", "a.pack", "--limit", "0"]).is_err());
+        assert!(Cli::try_parse_from(["packwright", "eval", "a.pack", "--limit", "2"]).is_ok());
+    }
 }
