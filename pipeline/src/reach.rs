@@ -23,7 +23,22 @@ use std::collections::BTreeMap;
 /// [`Workspace::robot`]) is not asked about.
 #[derive(Default)]
 pub struct RobotWorkspace {
-    cells: RefCell<BTreeMap<usize, Option<Reachability>>>,
+    cells: RefCell<BTreeMap<usize, Built>>,
+}
+
+/// A cell's reach, or why its arm cannot be built: the robot
+/// description's problem, or `None` where the compiler reports it itself
+/// (an unreadable file, E012).
+type Built = Result<Reachability, Option<String>>;
+
+/// The arm of cell `cell` (its URDF and meshes read once) and its reach.
+fn build(m: &Model, cell: usize) -> Built {
+    let record = cell_record(m.cells.get(cell).ok_or(None)?);
+    match arm_of(&record.robot) {
+        Ok(arm) => Ok(Reachability::new(&arm, &scene_of(&record))),
+        Err(PipelineError::Urdf { why, .. }) => Err(Some(why.to_string())),
+        Err(_) => Err(None),
+    }
 }
 
 impl RobotWorkspace {
@@ -31,14 +46,14 @@ impl RobotWorkspace {
         RobotWorkspace::default()
     }
 
-    fn ask<T>(&self, m: &Model, cell: usize, f: impl FnOnce(&Reachability) -> T) -> Option<T> {
+    /// `f` of cell `cell`'s [`Built`], built when first asked.
+    fn with<T>(&self, m: &Model, cell: usize, f: impl FnOnce(&Built) -> T) -> T {
         let mut cells = self.cells.borrow_mut();
-        let reach = cells.entry(cell).or_insert_with(|| {
-            let record = cell_record(m.cells.get(cell)?);
-            let arm = arm_of(&record.robot).ok()?;
-            Some(Reachability::new(&arm, &scene_of(&record)))
-        });
-        reach.as_ref().map(f)
+        f(cells.entry(cell).or_insert_with(|| build(m, cell)))
+    }
+
+    fn ask<T>(&self, m: &Model, cell: usize, f: impl FnOnce(&Reachability) -> T) -> Option<T> {
+        self.with(m, cell, |built| built.as_ref().ok().map(f))
     }
 }
 
@@ -81,12 +96,7 @@ fn pose(u: execute::Unreached) -> Unreached {
 
 impl Workspace for RobotWorkspace {
     fn robot(&self, m: &Model, cell: usize) -> Option<String> {
-        let record = cell_record(m.cells.get(cell)?);
-        // The compiler reports an unreadable file itself (E012).
-        match arm_of(&record.robot) {
-            Err(PipelineError::Urdf { why, .. }) => Some(why.to_string()),
-            _ => None,
-        }
+        self.with(m, cell, |built| built.as_ref().err().cloned().flatten())
     }
 
     fn start(&self, m: &Model, cell: usize) -> Option<Unreached> {
