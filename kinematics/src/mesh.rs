@@ -298,9 +298,9 @@ fn principal(points: &[Point3<f64>]) -> Option<(Vector3<f64>, Rotation3<f64>)> {
     ))
 }
 
-/// The smaller of the oriented bounding box and the capsule round the
-/// principal axis that hold every point of `points` (at least one),
-/// placed by `place`.
+/// The least-volume shape that holds every point of `points` (at least
+/// one), placed by `place`: the oriented bounding box, the capsule round
+/// the principal axis, or a cylinder along one of the principal axes.
 pub fn bound(points: &[Point3<f64>], place: &Isometry3<f64>) -> Shape {
     bound_also(points, place, None)
 }

@@ -68,7 +68,7 @@ pub fn from_urdf_with(text: &str, meshes: &MeshReader<'_>) -> Result<Arm, UrdfEr
         return Err(UrdfError::DuplicateLink);
     }
     let mut children: HashMap<&str, Vec<&urdf_rs::Joint>> = HashMap::new();
-    let mut has_parent: HashMap<&str, &str> = HashMap::new();
+    let mut has_parent: HashMap<&str, &urdf_rs::Joint> = HashMap::new();
     for j in &robot.joints {
         for end in [&j.parent.link, &j.child.link] {
             if !links.contains_key(end.as_str()) {
@@ -78,10 +78,10 @@ pub fn from_urdf_with(text: &str, meshes: &MeshReader<'_>) -> Result<Arm, UrdfEr
                 });
             }
         }
-        if let Some(other) = has_parent.insert(&j.child.link, &j.name) {
+        if let Some(other) = has_parent.insert(&j.child.link, j) {
             return Err(UrdfError::TwoParents {
                 link: j.child.link.clone(),
-                first: other.to_owned(),
+                first: other.name.clone(),
                 second: j.name.clone(),
             });
         }
@@ -104,7 +104,7 @@ pub fn from_urdf_with(text: &str, meshes: &MeshReader<'_>) -> Result<Arm, UrdfEr
         }
     };
 
-    let joints_to = |end: &str| path_to(&has_parent, &robot.joints, end);
+    let joints_to = |end: &str| path_to(&has_parent, end);
     let path = chain_path(&robot, root, &children, &joints_to)?;
     let on_path: HashSet<&str> = path.iter().map(|j| j.name.as_str()).collect();
 
@@ -125,18 +125,15 @@ fn moves(joint: &urdf_rs::Joint) -> bool {
 /// The joints from the root down to link `end`, root first (the tree has
 /// one root and every link one parent, checked before).
 fn path_to<'a>(
-    parent_joint: &HashMap<&str, &str>,
-    joints: &'a [urdf_rs::Joint],
+    parent_joint: &HashMap<&str, &'a urdf_rs::Joint>,
     end: &str,
 ) -> Vec<&'a urdf_rs::Joint> {
-    let by_name: HashMap<&str, &urdf_rs::Joint> =
-        joints.iter().map(|j| (j.name.as_str(), j)).collect();
     let mut path = Vec::new();
     let mut link = end;
-    while let Some(joint) = parent_joint.get(link).and_then(|j| by_name.get(j)) {
-        path.push(*joint);
+    while let Some(&joint) = parent_joint.get(link) {
+        path.push(joint);
         link = &joint.parent.link;
-        if path.len() > joints.len() {
+        if path.len() > parent_joint.len() {
             break; // a loop; refused before, kept finite here
         }
     }
