@@ -166,6 +166,9 @@ impl Lesson {
                     set.graphs.push(example(more));
                 }
                 if let Some(fewer) = without_later(&graph, choice.node) {
+                    if let Some(packed) = with_skipped_packed(&fewer, choice.node) {
+                        set.graphs.push(example(packed));
+                    }
                     set.graphs.push(example(fewer));
                 }
                 set.graphs.push(example(graph));
@@ -237,6 +240,32 @@ fn without_later(graph: &Graph, chosen: Option<usize>) -> Option<Graph> {
         nodes: graph.nodes[..keep].to_vec(),
         ..graph.clone()
     })
+}
+
+/// A picking decision's graph with every product the rule skips before
+/// the chosen one made a selected product already in its slot, and the
+/// same answer under the rule (packed products are skipped as products
+/// outside the order are). Applied to [`without_later`]'s graph, it puts
+/// packed products at the chain's head and the chosen one at its tail:
+/// demonstrations of orders whose products all come late in the chain
+/// show only unselected products there, and a model taught three
+/// hand-written demonstrations (`tests/cells/handful.pack`) chose a
+/// product packed at the chain's head over a waiting one in 19 of 30
+/// packages of five.
+/// `None` for a placing decision or when no product before the chosen
+/// one is outside the order.
+fn with_skipped_packed(graph: &Graph, chosen: Option<usize>) -> Option<Graph> {
+    let chosen = chosen?;
+    let mut packed = graph.clone();
+    let mut changed = false;
+    for node in packed.nodes.iter_mut().take(chosen) {
+        if !node.selected {
+            node.selected = true;
+            node.goal = node.centre;
+            changed = true;
+        }
+    }
+    changed.then_some(packed)
 }
 
 /// Share of the demonstrations a rule must explain to be taught.
@@ -419,5 +448,28 @@ mod tests {
         );
         assert_eq!(without_later(&g, Some(4)), None);
         assert_eq!(without_later(&g, None), None);
+    }
+
+    /// The products outside the order before the chosen one become packed
+    /// ones (selected, at their goal); the chosen one and those after it
+    /// are as they were, and so is the rule's answer.
+    #[test]
+    fn a_picking_decision_is_also_taught_with_packed_products_before_it() {
+        let g = graph(5);
+        let Some(packed) = with_skipped_packed(&g, Some(2)) else {
+            panic!("node 1 is outside the order");
+        };
+        assert!(packed.nodes[1].selected);
+        assert_eq!(packed.nodes[1].goal, g.nodes[1].centre);
+        assert_eq!(packed.nodes[0], g.nodes[0]);
+        assert_eq!(packed.nodes[2..], g.nodes[2..]);
+        let rows = packwright_nets::features::node_rows(&packed);
+        assert_eq!(
+            (rows[1][0], rows[1][2]),
+            (1.0, 0.0),
+            "selected, in its slot"
+        );
+        assert_eq!(with_skipped_packed(&g, Some(0)), None);
+        assert_eq!(with_skipped_packed(&g, None), None);
     }
 }
