@@ -58,6 +58,10 @@ pub enum Weakness {
         weakest: String,
         weakest_error_m: f64,
     },
+    /// Too few samples to hold some out
+    /// ([`crate::training::MIN_HELD_OUT`]): the network learned from all
+    /// of them, and its figures are on them, not on unseen ones.
+    NoneHeldOut { network: String, samples: usize },
     /// Still improving at the most epochs allowed.
     NotConverged { network: String, epochs: usize },
     /// Demonstrations that break the taught sequence rule (their
@@ -93,6 +97,10 @@ impl std::fmt::Display for Weakness {
                 MAX_SUBGOAL_ERROR * 1000.0,
                 weakest_error_m * 1000.0
             ),
+            Weakness::NoneHeldOut { network, samples } => write!(
+                f,
+                "the {network} learned from all of its {samples} samples, too few to hold some out: its figures are on what it was taught; more demonstrations give a held-out measure"
+            ),
             Weakness::NotConverged { network, epochs } => write!(
                 f,
                 "the {network} was still improving after {epochs} epochs; raise --epochs"
@@ -125,6 +133,12 @@ pub fn weaknesses(metrics: &[(Network, &NetworkMetrics)], dagger_rounds: usize) 
                 .map(|(k, v)| (k.clone(), *v))
                 .unwrap_or_default()
         };
+        if m.valid_samples == 0 {
+            out.push(Weakness::NoneHeldOut {
+                network: network.to_string(),
+                samples: m.train_samples,
+            });
+        }
         match network {
             Network::Reasoner if m.valid_metric < MIN_REASONER_ACCURACY => {
                 let (weakest, weakest_accuracy) = worst(true);
@@ -314,5 +328,24 @@ mod tests {
             networks,
             vec![Network::Reasoner.to_string(), Network::Dynamics.to_string()]
         );
+    }
+
+    /// A network that held nothing out says so, with its sample count.
+    #[test]
+    fn figures_on_the_training_samples_are_reported() {
+        let all = NetworkMetrics {
+            train_samples: 12,
+            valid_samples: 0,
+            ..metrics(0.002, true)
+        };
+        let found = weaknesses(&[(Network::SubGoal, &all)], 2);
+        assert_eq!(
+            found,
+            vec![Weakness::NoneHeldOut {
+                network: Network::SubGoal.to_string(),
+                samples: 12,
+            }]
+        );
+        assert!(found[0].to_string().contains("all of its 12 samples"));
     }
 }

@@ -106,10 +106,25 @@ const MEAN_SCALE: f64 = 0.01;
 /// which the dynamics loss stops growing relative: 0.05 is 0.75 degrees.
 const RELATIVE_FLOOR: f64 = 0.05 * 0.05;
 
+/// Fewer held-out samples than this measure nothing: a network whose
+/// held-out share would be smaller learns from all its samples, and its
+/// figures are on them ([`NetworkMetrics::valid_samples`] 0). One
+/// demonstration of two products is 12 sub-goals: holding 2 of them out
+/// kept a placing sub-goal the planner then never saw, and early stopping
+/// on the other one ended its training at the first epoch (408 mm off).
+pub const MIN_HELD_OUT: usize = 12;
+
+/// The training and held-out samples: a `holdout` share held out, or none
+/// when that is fewer than [`MIN_HELD_OUT`].
 fn split(n: usize, holdout: f64, rng: &mut ChaCha8Rng) -> (Vec<usize>, Vec<usize>) {
     let mut idx: Vec<usize> = (0..n).collect();
     idx.shuffle(rng);
-    let valid = ((n as f64 * holdout).round() as usize).min(n.saturating_sub(1));
+    let valid = (n as f64 * holdout).round() as usize;
+    let valid = if valid < MIN_HELD_OUT {
+        0
+    } else {
+        valid.min(n.saturating_sub(1))
+    };
     let train = idx.split_off(valid);
     (train, idx)
 }
@@ -254,7 +269,10 @@ fn argmax_rows(t: Tensor<2>) -> Vec<usize> {
 
 /// The loop every network shares. `loss` gives a batch's training loss on
 /// the autodiff device; `validate` the held-out (loss, metric) of a plain
-/// copy of the model.
+/// copy of the model; `settled` whether a reasoner right on every
+/// held-out decision is right on its training decisions too (a held-out
+/// share of a few demonstrations' decisions can be all right while the
+/// rest is not yet learnt).
 #[allow(clippy::too_many_arguments)]
 fn fit<M: Module>(
     (name, round): (Network, usize),
@@ -266,6 +284,7 @@ fn fit<M: Module>(
     rng: &mut ChaCha8Rng,
     mut loss: impl FnMut(&M, &[usize]) -> Tensor<1>,
     mut validate: impl FnMut(&M) -> (f64, f64),
+    mut settled: impl FnMut(&M) -> bool,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> (M, NetworkMetrics) {
     let started = Instant::now();
@@ -330,7 +349,8 @@ fn fit<M: Module>(
         // A reasoner whose held-out decisions are all right, with a loss
         // below 1e-3, has nothing left to learn (its cross-entropy would
         // creep down for hundreds of epochs).
-        let learnt = name == Network::Reasoner && metric >= 1.0 && valid_loss < 1e-3;
+        let learnt =
+            name == Network::Reasoner && metric >= 1.0 && valid_loss < 1e-3 && settled(&model);
         if learnt
             || epoch - progressed.1 >= plateau
             || (epoch >= config.epochs && epoch - progressed.1 >= late_plateau)
@@ -452,6 +472,9 @@ pub fn train(
                 pick(&valid_idx)
             };
             let valid_batch = graph_batch(&valid_graphs, &plain);
+            // The training decisions' batch, built the first time the
+            // held-out ones are all right.
+            let mut train_batch = None;
             let (reasoner, mut reasoner_metrics) = fit(
                 (Network::Reasoner, 0),
                 initial_reasoner,
@@ -469,6 +492,14 @@ pub fn train(
                     let (loss, accuracy, _) =
                         reasoner_check(&m.valid(), &valid_batch, &valid_graphs);
                     (loss, accuracy)
+                },
+                |m| {
+                    if valid_idx.is_empty() {
+                        return true;
+                    }
+                    let graphs = pick(&train_idx);
+                    let batch = train_batch.get_or_insert_with(|| graph_batch(&graphs, &plain));
+                    reasoner_check(&m.valid(), batch, &graphs).1 >= 1.0
                 },
                 progress,
             );
@@ -539,6 +570,7 @@ pub fn train(
                     let (nll, error, _) = subgoal_check(&m.valid(), &vx, &vy, &valid_examples);
                     (nll, error)
                 },
+                |_| true,
                 progress,
             );
             subgoal_metrics.parts = subgoal_check(&subgoal.valid(), &vx, &vy, &valid_examples).2;
@@ -612,6 +644,7 @@ pub(super) fn train_dynamics(
             let degrees = scalar(diff.abs().mean()) * 5.0;
             (mse, degrees)
         },
+        |_| true,
         progress,
     );
     dynamics_metrics.metric = "held-out mean absolute joint-step error (degrees)".into();
@@ -798,6 +831,21 @@ mod tests {
             again.networks.action([0.01, 0.02, -0.01], [0.1, -1.0, 1.2]),
             nets.action([0.01, 0.02, -0.01], [0.1, -1.0, 1.2])
         );
+    }
+
+    /// A fifth is held out when that is at least `MIN_HELD_OUT` samples;
+    /// otherwise nothing, and every sample trains.
+    #[test]
+    fn small_sets_hold_nothing_out() {
+        let mut rng = ChaCha8Rng::seed_from_u64(0);
+        for (n, held) in [(12, 0), (57, 0), (58, 12), (200, 40)] {
+            let (train, valid) = split(n, 0.2, &mut rng);
+            assert_eq!((train.len(), valid.len()), (n - held, held), "{n} samples");
+        }
+        let (train, valid) = split(12, 0.2, &mut rng);
+        let mut all: Vec<usize> = train.into_iter().chain(valid).collect();
+        all.sort_unstable();
+        assert_eq!(all, (0..12).collect::<Vec<_>>());
     }
 
     #[test]
