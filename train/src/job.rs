@@ -99,7 +99,7 @@ impl std::fmt::Display for Weakness {
             ),
             Weakness::NoneHeldOut { network, samples } => write!(
                 f,
-                "the {network} learned from all of its {samples} samples, too few to hold some out: its figures are on what it was taught; more demonstrations give a held-out measure"
+                "the {network} network learned from all of its {samples} samples, too few to hold some out: its figures are on what it was taught; more demonstrations give a held-out measure"
             ),
             Weakness::NotConverged { network, epochs } => write!(
                 f,
@@ -346,6 +346,10 @@ mod tests {
                 samples: 12,
             }]
         );
-        assert!(found[0].to_string().contains("all of its 12 samples"));
+        assert!(
+            found[0]
+                .to_string()
+                .starts_with("the sub-goal network learned from all of its 12 samples")
+        );
     }
 }
