@@ -126,8 +126,8 @@ fn a_model_generalises_on_a_cell_with_box_and_products_on_opposite_sides() {
 /// slots no demonstration used, and where a worker packed some first: a
 /// product packed at the chain's head is skipped, as one outside the
 /// order is. Before each picking decision was also taught with the
-/// products the rule skips made packed ones, this model chose a packed
-/// product again in 19 of the 30 packages of five.
+/// products the rule skips swapped (outside the order and packed), this
+/// model chose a packed product again in 19 of the 30 packages of five.
 #[test]
 fn a_model_taught_three_hand_written_demonstrations_keeps_its_rule_on_larger_orders() {
     let dir = scratch("generalisation", "handful");

@@ -166,8 +166,8 @@ impl Lesson {
                     set.graphs.push(example(more));
                 }
                 if let Some(fewer) = without_later(&graph, choice.node) {
-                    if let Some(packed) = with_skipped_packed(&fewer, choice.node) {
-                        set.graphs.push(example(packed));
+                    if let Some(swapped) = with_skipped_swapped(&fewer, choice.node) {
+                        set.graphs.push(example(swapped));
                     }
                     set.graphs.push(example(fewer));
                 }
@@ -242,30 +242,27 @@ fn without_later(graph: &Graph, chosen: Option<usize>) -> Option<Graph> {
     })
 }
 
-/// A picking decision's graph with every product the rule skips before
-/// the chosen one made a selected product already in its slot, and the
-/// same answer under the rule (packed products are skipped as products
-/// outside the order are). Applied to [`without_later`]'s graph, it puts
-/// packed products at the chain's head and the chosen one at its tail:
-/// demonstrations of orders whose products all come late in the chain
-/// show only unselected products there, and a model taught three
-/// hand-written demonstrations (`tests/cells/handful.pack`) chose a
-/// product packed at the chain's head over a waiting one in 19 of 30
-/// packages of five.
-/// `None` for a placing decision or when no product before the chosen
-/// one is outside the order.
-fn with_skipped_packed(graph: &Graph, chosen: Option<usize>) -> Option<Graph> {
-    let chosen = chosen?;
-    let mut packed = graph.clone();
-    let mut changed = false;
-    for node in packed.nodes.iter_mut().take(chosen) {
-        if !node.selected {
-            node.selected = true;
-            node.goal = node.centre;
-            changed = true;
-        }
+/// A picking decision's graph with the two kinds of product the rule
+/// skips before the chosen one swapped, and the same answer under the
+/// rule: each product outside the order becomes a selected one already in
+/// its slot, each packed one a product outside the order. Applied to
+/// [`without_later`]'s graph, it puts the kind the demonstrations did not
+/// show at the chain's head, with the chosen product at its tail. Orders
+/// whose products all come late in the chain show only products outside
+/// the order there: a model taught three hand-written demonstrations
+/// (`tests/cells/handful.pack`) chose a product packed at the chain's head
+/// again in 19 of 30 packages of five; an order whose first product
+/// heads the chain shows only packed products there: a model taught one
+/// such demonstration chose a product outside the order at the head.
+/// `None` for a placing decision or the chain's first product.
+fn with_skipped_swapped(graph: &Graph, chosen: Option<usize>) -> Option<Graph> {
+    let chosen = chosen.filter(|&c| c > 0)?;
+    let mut swapped = graph.clone();
+    for node in swapped.nodes.iter_mut().take(chosen) {
+        node.selected = !node.selected;
+        node.goal = node.centre;
     }
-    changed.then_some(packed)
+    Some(swapped)
 }
 
 /// Share of the demonstrations a rule must explain to be taught.
@@ -450,26 +447,30 @@ mod tests {
         assert_eq!(without_later(&g, None), None);
     }
 
-    /// The products outside the order before the chosen one become packed
-    /// ones (selected, at their goal); the chosen one and those after it
-    /// are as they were, and so is the rule's answer.
+    /// Before the chosen product, the products outside the order become
+    /// packed ones (selected, at their goal) and the packed ones products
+    /// outside the order; the chosen one and those after it are as they
+    /// were, and so is the rule's answer.
     #[test]
-    fn a_picking_decision_is_also_taught_with_packed_products_before_it() {
-        let g = graph(5);
-        let Some(packed) = with_skipped_packed(&g, Some(2)) else {
-            panic!("node 1 is outside the order");
+    fn a_picking_decision_is_also_taught_with_the_skipped_products_swapped() {
+        let mut g = graph(5);
+        // Node 0 packed: selected, at its goal.
+        g.nodes[0].centre = g.nodes[0].goal;
+        let Some(swapped) = with_skipped_swapped(&g, Some(2)) else {
+            panic!("nodes before the chosen one");
         };
-        assert!(packed.nodes[1].selected);
-        assert_eq!(packed.nodes[1].goal, g.nodes[1].centre);
-        assert_eq!(packed.nodes[0], g.nodes[0]);
-        assert_eq!(packed.nodes[2..], g.nodes[2..]);
-        let rows = packwright_nets::features::node_rows(&packed);
+        assert_eq!(swapped.nodes[2..], g.nodes[2..]);
+        let rows = packwright_nets::features::node_rows(&swapped);
+        // (selected, place, out of its slot, held)
+        assert_eq!((rows[0][0], rows[0][2]), (0.0, 0.0), "outside the order");
         assert_eq!(
             (rows[1][0], rows[1][2]),
             (1.0, 0.0),
             "selected, in its slot"
         );
-        assert_eq!(with_skipped_packed(&g, Some(0)), None);
-        assert_eq!(with_skipped_packed(&g, None), None);
+        let before = packwright_nets::features::node_rows(&g);
+        assert_eq!(rows[2..], before[2..]);
+        assert_eq!(with_skipped_swapped(&g, Some(0)), None);
+        assert_eq!(with_skipped_swapped(&g, None), None);
     }
 }
