@@ -16,6 +16,7 @@ mod common;
 use common::{packwright, scratch};
 use packwright_pipeline::generate::{Family, Generated, SuiteKind, family_cell, generated_cell};
 use std::fs;
+use std::path::Path;
 use std::process::Output;
 
 fn text(out: &Output) -> String {
@@ -30,6 +31,28 @@ fn json(out: &Output) -> serde_json::Value {
     serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("JSON ({e}): {}", text(out)))
 }
 
+/// `pack` compiled into `dir/out` (exit 0), then `train` on it with
+/// `dagger_rounds` into `dir/model`, quiet, with JSON metrics: the model
+/// directory and `train`'s output (its exit code the caller's to judge).
+fn compiled_and_trained(pack: &str, dir: &Path, dagger_rounds: u32) -> (String, Output) {
+    let compiled = dir.join("out").display().to_string();
+    let model = dir.join("model").display().to_string();
+    let out = packwright(&["compile", pack, "-o", &compiled]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let rounds = dagger_rounds.to_string();
+    let out = packwright(&[
+        "train",
+        &compiled,
+        "-o",
+        &model,
+        "--dagger-rounds",
+        &rounds,
+        "--quiet",
+        "--json",
+    ]);
+    (model, out)
+}
+
 /// Scenarios of each suite run by the learned planner.
 const SCENARIOS: usize = 6;
 
@@ -39,21 +62,7 @@ fn learns_cell(seed: u64) {
     let pack = dir.join(cell.file_name());
     fs::write(&pack, &cell.text).expect("generated file written");
     let pack = pack.display().to_string();
-    let compiled = dir.join("out").display().to_string();
-    let model = dir.join("model").display().to_string();
-
-    let out = packwright(&["compile", &pack, "-o", &compiled]);
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
-    let out = packwright(&[
-        "train",
-        &compiled,
-        "-o",
-        &model,
-        "--dagger-rounds",
-        "1",
-        "--quiet",
-        "--json",
-    ]);
+    let (model, out) = compiled_and_trained(&pack, &dir, 1);
     // Exit 1: a demonstration the expert could not replay (reported).
     assert!(matches!(out.status.code(), Some(0 | 1)), "{}", text(&out));
     let report = json(&out);
@@ -131,21 +140,8 @@ fn a_model_generalises_on_a_cell_with_box_and_products_on_opposite_sides() {
 #[test]
 fn a_model_taught_three_hand_written_demonstrations_keeps_its_rule_on_larger_orders() {
     let dir = scratch("generalisation", "handful");
-    let compiled = dir.join("out").display().to_string();
-    let model = dir.join("model").display().to_string();
     let pack = "tests/cells/handful.pack";
-    let out = packwright(&["compile", pack, "-o", &compiled]);
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
-    let out = packwright(&[
-        "train",
-        &compiled,
-        "-o",
-        &model,
-        "--dagger-rounds",
-        "0",
-        "--quiet",
-        "--json",
-    ]);
+    let (model, out) = compiled_and_trained(pack, &dir, 0);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
     let report = json(&out);
     assert_eq!(report["demonstrations"], 3, "{report}");

@@ -472,8 +472,8 @@ pub fn train(
                 pick(&valid_idx)
             };
             let valid_batch = graph_batch(&valid_graphs, &plain);
-            // The training decisions' batch, built the first time the
-            // held-out ones are all right.
+            // The training decisions and their batch, built the first
+            // time the held-out ones are all right.
             let mut train_batch = None;
             let (reasoner, mut reasoner_metrics) = fit(
                 (Network::Reasoner, 0),
@@ -497,9 +497,12 @@ pub fn train(
                     if valid_idx.is_empty() {
                         return true;
                     }
-                    let graphs = pick(&train_idx);
-                    let batch = train_batch.get_or_insert_with(|| graph_batch(&graphs, &plain));
-                    reasoner_check(&m.valid(), batch, &graphs).1 >= 1.0
+                    let (graphs, batch) = train_batch.get_or_insert_with(|| {
+                        let graphs = pick(&train_idx);
+                        let batch = graph_batch(&graphs, &plain);
+                        (graphs, batch)
+                    });
+                    reasoner_check(&m.valid(), batch, graphs).1 >= 1.0
                 },
                 progress,
             );
