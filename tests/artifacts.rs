@@ -308,5 +308,4 @@ fn corrupted_artifacts_are_refused_by_every_reader() {
             &what("demonstrate"),
         );
     }
-    let _ = fs::remove_dir_all(&root);
 }

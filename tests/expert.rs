@@ -56,7 +56,6 @@ fn front_to_back_packages_are_packed_by_the_expert_and_rrt_connect() {
             String::from_utf8_lossy(&out.stdout)
         );
     }
-    let _ = fs::remove_dir_all(dir);
 }
 
 /// A tote behind the robot (products in front, far out) and a robot on a
@@ -133,5 +132,4 @@ order one for inv {
             );
         }
     }
-    let _ = fs::remove_dir_all(dir);
 }

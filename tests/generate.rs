@@ -414,7 +414,8 @@ const REPORTED_CELLS_FNV1A: u64 = 14_355_755_209_199_636_192;
 
 #[test]
 fn the_command_writes_one_file_per_seed() {
-    let dir = scratch("generate", "cli").join("cells");
+    let scratch = scratch("generate", "cli");
+    let dir = scratch.join("cells");
     let out = dir.display().to_string();
     let run = packwright(&["generate", "--seed", "5", "--count", "3", "-o", &out]);
     assert_eq!(
@@ -499,5 +500,4 @@ fn the_command_writes_one_file_per_seed() {
             .code(),
         Some(2)
     );
-    let _ = fs::remove_dir_all(dir.parent().expect("scratch"));
 }

@@ -65,7 +65,6 @@ fn show_of(files: &[&str], scratch_name: &str) -> String {
         "show failed:\n{}",
         text(&shown.stderr)
     );
-    let _ = fs::remove_dir_all(&dir);
     text(&shown.stdout)
 }
 
@@ -174,7 +173,6 @@ fn compiling_twice_gives_the_same_bytes() {
             "{name} differs between two compiles of the same input"
         );
     }
-    let _ = fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -224,7 +222,6 @@ fn compile_replaces_artifacts_but_never_other_directories() {
         leftovers.is_empty(),
         "temporary directories left behind: {leftovers:?}"
     );
-    let _ = fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -273,7 +270,6 @@ fn exit_codes_and_json_lines() {
         said.contains("a compiled directory, not a .pack file"),
         "{said}"
     );
-    let _ = fs::remove_dir_all(&dir);
 
     let json = packwright(&["check", "--json", "tests/cases/err/many_errors.pack"]);
     assert_eq!(json.status.code(), Some(1));
@@ -327,7 +323,6 @@ fn fmt_check_then_fmt_then_clean() {
         fs::read_to_string(&broken).expect("read"),
         "product A cube (\n"
     );
-    let _ = fs::remove_dir_all(&dir);
 }
 
 /// The canonical examples in `../shared/examples/` (beside the
@@ -374,7 +369,6 @@ fn the_readme_example_compiles() {
     fs::write(&file, body).expect("write");
     let out = packwright(&["check", &file.display().to_string()]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
-    let _ = fs::remove_dir_all(&dir);
 }
 
 /// The per-product execution plan of every example order, with the expert
@@ -508,5 +502,4 @@ fn demonstrate_writes_motion_demonstrations() {
         let v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
         assert!(v.abs() <= limit, "action {v} beyond 15 degrees");
     }
-    let _ = fs::remove_dir_all(&dir);
 }

@@ -116,7 +116,6 @@ fn train_writes_a_model_that_execute_loads() {
     assert_eq!(run["planner"], "learned");
     assert_eq!(run["task"], "pine_duo");
     assert_eq!(run["products"].as_array().map(Vec::len), Some(2));
-    let _ = fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -157,7 +156,6 @@ fn eval_reports_every_planner_of_a_suite() {
         md.contains("| m_case1_2of3 | line2 | learned | 3 | 1.000"),
         "{md}"
     );
-    let _ = fs::remove_dir_all(&dir);
 }
 
 /// The bundled model serves cells it was not taught: `execute` on a
@@ -199,5 +197,4 @@ fn the_bundled_model_packs_a_cell_it_was_not_taught() {
     let run: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(run["planner"], "learned");
     assert_eq!(run["complete"], true, "{}", text(&out));
-    let _ = fs::remove_dir_all(&dir);
 }

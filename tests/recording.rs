@@ -190,7 +190,6 @@ mod with_rerun {
         assert_eq!(r.rows(paths::EVENTS_OUTCOME), 4 + 1);
         assert_eq!(r.rows(paths::SUBGOALS_PLANNED), 4 * 6);
         assert!(r.rows(paths::SUBGOALS_REACHED) >= 4 * 4);
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// `eval --record DIR` writes DIR/SUITE/NN.rrd per scenario (numbered
@@ -237,7 +236,6 @@ mod with_rerun {
                 .count();
             assert_eq!(reasoned, 1, "{case}");
         }
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }
 
@@ -267,5 +265,4 @@ fn record_needs_the_rerun_feature() {
         assert!(o.stdout.is_empty(), "nothing ran");
     }
     assert!(!std::path::Path::new(file).exists());
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -46,7 +46,6 @@ fn oversized_and_endless_sources_are_refused_quickly() {
             );
         }
     }
-    let _ = fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -74,7 +73,6 @@ fn a_killed_runs_temporary_directories_are_removed_by_the_next_run() {
         "stale siblings removed"
     );
     assert!(live.exists(), "a live process's sibling is left alone");
-    let _ = fs::remove_dir_all(&dir);
 }
 
 fn strs(v: &[String]) -> Vec<&str> {
@@ -265,7 +263,6 @@ fn a_killed_compile_leaves_the_old_output_or_the_new_one() {
     let made = packwright(&["compile", &old_file, "-o", &out_s]);
     assert_eq!(made.status.code(), Some(0));
     assert!(siblings(&dir, "out").is_empty(), "no debris after a run");
-    let _ = fs::remove_dir_all(&dir);
 }
 
 /// `train` killed at fixed points over its run: the model directory is
@@ -342,7 +339,6 @@ fn a_killed_train_leaves_the_old_model_or_the_new_one() {
     let made = packwright(&strs(&short));
     assert_eq!(made.status.code(), Some(0));
     assert!(siblings(&dir, "model").is_empty(), "no debris after a run");
-    let _ = fs::remove_dir_all(&dir);
 }
 
 /// A model named with `--model` that cannot be used (another schema, or
@@ -379,5 +375,4 @@ fn eval_refuses_a_model_it_cannot_use_before_running_anything() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(&bad), "{bad}: {err}");
     }
-    let _ = fs::remove_dir_all(&dir);
 }

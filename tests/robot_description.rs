@@ -68,7 +68,6 @@ fn a_ros_layout_of_the_ur10_packs_as_the_built_in_one_does() {
         };
         assert_eq!(times(&ros), times(&ur10), "{scenario}");
     }
-    let _ = fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -111,5 +110,4 @@ fn a_description_with_a_mesh_it_cannot_find_is_refused_at_check() {
         1,
         "{said}"
     );
-    let _ = fs::remove_dir_all(&dir);
 }
