@@ -1,7 +1,7 @@
 //! The glue between the language half and the robot half, for any front
 //! end (the `packwright` command line is one): episodes from the
 //! compiler's model or compiled artifacts, artifact readers, expert
-//! replays, training lessons, model directories and the bundled model,
+//! replays and rehearsals, training lessons, model directories and the bundled model,
 //! evaluation rows and their statistics. No burn: training itself is
 //! `packwright-train`.
 
@@ -13,6 +13,7 @@ pub mod generate;
 pub mod models;
 pub mod motion_file;
 pub mod reach;
+pub mod rehearse;
 pub mod replay;
 pub mod robot;
 pub mod stats;

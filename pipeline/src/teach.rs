@@ -1,11 +1,13 @@
 //! What a training run learns from: the demonstrations chosen from a
 //! compiled directory (in one cell or several), the sequence rule they
 //! follow, the reasoner's decisions they imply, and the expert's replays
-//! of them (motion demonstrations).
+//! of them and rehearsals of what they did not move (motion
+//! demonstrations).
 
 use crate::artifacts::CompiledDir;
 use crate::episode::{Episode, demonstration_episode};
 use crate::error::{PipelineError, Result};
+use crate::rehearse::rehearsals;
 use crate::replay::{motion_examples, replay_all};
 use packwright_compiler::artifact::{DemonstrationRecord, WorldFile};
 use packwright_compiler::{Compiled, emit};
@@ -31,6 +33,9 @@ pub struct Lesson {
     /// The chosen demonstrations (indices) that break it: their decisions
     /// are not taught.
     pub exceptions: Vec<usize>,
+    /// The expert's rehearsals of the products and slots no chosen
+    /// demonstration moved ([`rehearsals`]): motion examples only.
+    pub rehearsals: Vec<DemonstrationRecord>,
 }
 
 /// The expert's replays of a lesson's demonstrations.
@@ -38,6 +43,8 @@ pub struct Replayed {
     /// Per chosen demonstration: its motion log, `None` if the expert
     /// could not complete it.
     pub logs: Vec<Option<MotionLog>>,
+    /// Per rehearsal, the same.
+    pub rehearsed: Vec<Option<MotionLog>>,
     pub seconds: f64,
 }
 
@@ -54,6 +61,11 @@ impl Replayed {
 
     pub fn complete(&self) -> Vec<&MotionLog> {
         self.logs.iter().flatten().collect()
+    }
+
+    /// How many rehearsals the expert completed.
+    pub fn rehearsals_completed(&self) -> usize {
+        self.rehearsed.iter().flatten().count()
     }
 }
 
@@ -109,6 +121,7 @@ impl Lesson {
             rule: sequence,
             exceptions,
         } = sequence_rule(&world, &chosen)?;
+        let rehearsals = rehearsals(&world, &chosen);
         Ok(Lesson {
             world,
             chosen,
@@ -116,17 +129,20 @@ impl Lesson {
             blocks,
             sequence,
             exceptions,
+            rehearsals,
         })
     }
 
-    /// Replays the chosen demonstrations with the expert in the simulator
-    /// (in parallel); `tick` after each.
+    /// Replays the chosen demonstrations and the rehearsals with the
+    /// expert in the simulator (in parallel); `tick` after each.
     pub fn replay(&self, tick: &(dyn Fn() + Sync)) -> Result<Replayed> {
         let started = Instant::now();
-        let demos: Vec<&DemonstrationRecord> = self.chosen.iter().collect();
-        let logs = replay_all(&self.world, &demos, tick)?;
+        let demos: Vec<&DemonstrationRecord> = self.chosen.iter().chain(&self.rehearsals).collect();
+        let mut logs = replay_all(&self.world, &demos, tick)?;
+        let rehearsed = logs.split_off(self.chosen.len());
         Ok(Replayed {
             logs,
+            rehearsed,
             seconds: started.elapsed().as_secs_f64(),
         })
     }
@@ -179,12 +195,27 @@ impl Lesson {
                 set.actions.extend(a);
             }
         }
+        for (ep, log) in self.rehearsal_episodes()?.iter().zip(&replayed.rehearsed) {
+            if let Some(log) = log {
+                let (s, a) = motion_examples(log, ep.task.cell.base);
+                set.subgoals.extend(s);
+                set.actions.extend(a);
+            }
+        }
         Ok(set)
     }
 
     /// The episodes of the chosen demonstrations (their arms and cells).
     pub fn episodes(&self) -> Result<Vec<Episode>> {
         self.chosen
+            .iter()
+            .map(|d| demonstration_episode(&self.world, d))
+            .collect()
+    }
+
+    /// The episodes of the rehearsals.
+    pub fn rehearsal_episodes(&self) -> Result<Vec<Episode>> {
+        self.rehearsals
             .iter()
             .map(|d| demonstration_episode(&self.world, d))
             .collect()

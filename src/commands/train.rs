@@ -30,7 +30,7 @@ fn bar(len: u64, quiet: bool, template: &str) -> ProgressBar {
 pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
     let lesson = Lesson::read(&args.dir, &args.demos)?;
     let replaying = bar(
-        lesson.chosen.len() as u64,
+        (lesson.chosen.len() + lesson.rehearsals.len()) as u64,
         args.quiet,
         "replaying demonstrations [{bar:30}] {pos}/{len} {elapsed}",
     );
@@ -128,6 +128,13 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
             report.training_s
         );
         outln!("  sequence rule taught: {}", report.sequence);
+        if report.rehearsals > 0 {
+            outln!(
+                "  rehearsed by the expert: {} of {} orders of the products and slots no demonstration moved (motion examples only)",
+                report.rehearsed,
+                report.rehearsals
+            );
+        }
         // Figures on held-out samples, or on the training samples where
         // there were too few to hold some out.
         let on = |m: &NetworkMetrics| {

@@ -23,6 +23,10 @@ pub struct TrainingReport {
     /// Indices (among the chosen demonstrations) the expert could not
     /// replay.
     pub replay_failures: Vec<usize>,
+    /// The expert's rehearsals of the products and slots no demonstration
+    /// moved (motion examples only), and how many it completed.
+    pub rehearsals: usize,
+    pub rehearsed: usize,
     pub replay_s: f64,
     pub samples: Samples,
     pub training_s: f64,
@@ -200,9 +204,11 @@ pub fn run(
 ) -> Result<(Trained, TrainingReport), JobError> {
     let set = lesson.training_set(replayed)?;
     let episodes = lesson.episodes()?;
+    let rehearsals = lesson.rehearsal_episodes()?;
     let recorded: Vec<Recorded> = episodes
         .iter()
         .zip(&replayed.logs)
+        .chain(rehearsals.iter().zip(&replayed.rehearsed))
         .filter_map(|(ep, log)| {
             log.as_ref().map(|log| Recorded {
                 log,
@@ -253,6 +259,8 @@ pub fn run(
         demonstrations: lesson.chosen.len(),
         replayed: lesson.chosen.len() - failures.len(),
         replay_failures: failures,
+        rehearsals: lesson.rehearsals.len(),
+        rehearsed: replayed.rehearsals_completed(),
         replay_s: replayed.seconds,
         samples: Samples {
             graphs: set.graphs.len(),
