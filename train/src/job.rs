@@ -49,15 +49,19 @@ pub const MAX_SUBGOAL_ERROR: f64 = 0.010;
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Weakness {
     /// Held-out reasoner accuracy below [`MIN_REASONER_ACCURACY`]; the
-    /// weakest stage and its accuracy.
+    /// weakest stage and its accuracy. `held_out` is false when nothing
+    /// was held out: the figures are then on the training samples.
     Reasoner {
+        held_out: bool,
         accuracy: f64,
         weakest: String,
         weakest_accuracy: f64,
     },
     /// Held-out mean sub-goal error above [`MAX_SUBGOAL_ERROR`]; the
-    /// weakest stage and sub-goal and its error.
+    /// weakest stage and sub-goal and its error (`held_out` as for the
+    /// reasoner).
     SubGoal {
+        held_out: bool,
         error_m: f64,
         weakest: String,
         weakest_error_m: f64,
@@ -81,22 +85,27 @@ pub enum Weakness {
 
 impl std::fmt::Display for Weakness {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let on = |held_out: bool| if held_out { "held-out" } else { "training" };
         match self {
             Weakness::Reasoner {
+                held_out,
                 accuracy,
                 weakest,
                 weakest_accuracy,
             } => write!(
                 f,
-                "held-out reasoner accuracy {accuracy:.3} is below {MIN_REASONER_ACCURACY} (weakest: {weakest} decisions, {weakest_accuracy:.3}); teach more demonstrations of that stage"
+                "{} reasoner accuracy {accuracy:.3} is below {MIN_REASONER_ACCURACY} (weakest: {weakest} decisions, {weakest_accuracy:.3}); teach more demonstrations of that stage",
+                on(*held_out)
             ),
             Weakness::SubGoal {
+                held_out,
                 error_m,
                 weakest,
                 weakest_error_m,
             } => write!(
                 f,
-                "held-out sub-goal error {:.1} mm is above {:.0} mm (weakest: {weakest} sub-goal, {:.1} mm)",
+                "{} sub-goal error {:.1} mm is above {:.0} mm (weakest: {weakest} sub-goal, {:.1} mm)",
+                on(*held_out),
                 error_m * 1000.0,
                 MAX_SUBGOAL_ERROR * 1000.0,
                 weakest_error_m * 1000.0
@@ -147,6 +156,7 @@ pub fn weaknesses(metrics: &[(Network, &NetworkMetrics)], dagger_rounds: usize) 
             Network::Reasoner if m.valid_metric < MIN_REASONER_ACCURACY => {
                 let (weakest, weakest_accuracy) = worst(true);
                 out.push(Weakness::Reasoner {
+                    held_out: m.valid_samples > 0,
                     accuracy: m.valid_metric,
                     weakest,
                     weakest_accuracy,
@@ -155,6 +165,7 @@ pub fn weaknesses(metrics: &[(Network, &NetworkMetrics)], dagger_rounds: usize) 
             Network::SubGoal if m.valid_metric > MAX_SUBGOAL_ERROR => {
                 let (weakest, weakest_error_m) = worst(false);
                 out.push(Weakness::SubGoal {
+                    held_out: m.valid_samples > 0,
                     error_m: m.valid_metric,
                     weakest,
                     weakest_error_m,
@@ -358,6 +369,35 @@ mod tests {
             found[0]
                 .to_string()
                 .starts_with("the sub-goal network learned from all of its 12 samples")
+        );
+        // A weak figure on training samples is not called held-out.
+        let weak = NetworkMetrics {
+            valid_samples: 0,
+            ..metrics(0.5, true)
+        };
+        let found = weaknesses(&[(Network::Reasoner, &weak)], 2);
+        assert!(
+            matches!(
+                found[1],
+                Weakness::Reasoner {
+                    held_out: false,
+                    ..
+                }
+            ),
+            "{found:?}"
+        );
+        assert!(
+            found[1]
+                .to_string()
+                .starts_with("training reasoner accuracy 0.500"),
+            "{}",
+            found[1]
+        );
+        let found = weaknesses(&[(Network::Reasoner, &metrics(0.5, true))], 2);
+        assert!(
+            found[0]
+                .to_string()
+                .starts_with("held-out reasoner accuracy")
         );
     }
 }

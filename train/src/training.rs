@@ -381,6 +381,17 @@ fn fit<M: Module>(
 /// reproducible, so they take turns.
 pub(crate) static SEEDED_DEVICE: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
+/// What a network's figure `what` was measured on: held-out samples, or
+/// the training samples where too few were held out
+/// ([`MIN_HELD_OUT`]).
+fn measured_on(m: &NetworkMetrics, what: &str) -> String {
+    if m.valid_samples == 0 {
+        format!("{what}, on the training samples (too few to hold some out)")
+    } else {
+        format!("held-out {what}")
+    }
+}
+
 /// Trains the reasoner, the sub-goal planner and the dynamics policy on
 /// `set`, reproducibly from `config.seed`; with a `coach`, the dynamics
 /// policy then gets `config.dagger_rounds` rounds of DAgger. Trainings in
@@ -506,8 +517,10 @@ pub fn train(
                 },
                 progress,
             );
-            reasoner_metrics.metric =
-                "held-out accuracy (node or box right, and the slot when placing)".into();
+            reasoner_metrics.metric = measured_on(
+                &reasoner_metrics,
+                "accuracy (node or box right, and the slot when placing)",
+            );
             reasoner_metrics.parts =
                 reasoner_check(&reasoner.valid(), &valid_batch, &valid_graphs).2;
             (reasoner, reasoner_metrics)
@@ -577,7 +590,8 @@ pub fn train(
                 progress,
             );
             subgoal_metrics.parts = subgoal_check(&subgoal.valid(), &vx, &vy, &valid_examples).2;
-            subgoal_metrics.metric = "held-out mean sub-goal error (m, Euclidean)".into();
+            subgoal_metrics.metric =
+                measured_on(&subgoal_metrics, "mean sub-goal error (m, Euclidean)");
             (subgoal, subgoal_metrics)
         };
         let dynamics = dynamics
@@ -650,7 +664,10 @@ pub(super) fn train_dynamics(
         |_| true,
         progress,
     );
-    dynamics_metrics.metric = "held-out mean absolute joint-step error (degrees)".into();
+    dynamics_metrics.metric = measured_on(
+        &dynamics_metrics,
+        "mean absolute joint-step error (degrees)",
+    );
     (dynamics, dynamics_metrics)
 }
 
