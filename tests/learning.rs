@@ -204,3 +204,64 @@ fn the_bundled_model_packs_a_cell_it_was_not_taught() {
     assert_eq!(run["planner"], "learned");
     assert_eq!(run["complete"], true, "{}", text(&out));
 }
+
+/// A `demos` block with `sequence random` shows that any order is right:
+/// `train` teaches the inventory's order (before, it refused: the
+/// demonstrations followed no one rule), and `execute` with a model not
+/// taught the cell keeps the model's own order without calling the
+/// demonstrations contradictory.
+#[test]
+fn demonstrations_in_random_order_teach_the_inventorys_order() {
+    let dir = scratch("learning", "random");
+    let cell = packwright_pipeline::generate::family_cell(9950);
+    let shuffled = cell
+        .text
+        .lines()
+        .map(|l| {
+            if l.trim_start().starts_with("sequence ") {
+                "  sequence random".to_owned()
+            } else {
+                l.to_owned()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert!(shuffled.contains("sequence random"), "{shuffled}");
+    let pack = dir.join(cell.file_name());
+    fs::write(&pack, shuffled).expect("written");
+    let pack = pack.display().to_string();
+    let compiled = dir.join("out").display().to_string();
+    let out = packwright(&["compile", &pack, "-o", &compiled]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let model = dir.join("model").display().to_string();
+    let out = packwright(&[
+        "train",
+        &compiled,
+        "-o",
+        &model,
+        "--epochs",
+        "5",
+        "--dagger-rounds",
+        "0",
+        "--quiet",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(report["sequence"], "ascending", "{report}");
+    assert_eq!(report["any_order"], report["demonstrations"], "{report}");
+    assert!(report["any_order"].as_u64() > Some(1), "{report}");
+    let out = packwright(&[
+        "execute",
+        &pack,
+        "--scenario",
+        &format!(
+            "{}/01",
+            cell.suite(packwright_pipeline::generate::SuiteKind::Case1N)
+                .name
+        ),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("follow no one order"), "{stderr}");
+}

@@ -77,6 +77,10 @@ pub struct DemoBlockRecord {
     pub first_demonstration: usize,
     pub demonstrations: usize,
     pub samples: usize,
+    /// A `demos` block with `sequence random`: any order is right (absent
+    /// when false, so other blocks' bytes are as before).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub any_order: bool,
 }
 
 /// A product and where it is, `[x, y, z]` in metres (z = centre height).

@@ -47,7 +47,7 @@ pub enum PipelineError {
     Model { what: String, why: ModelError },
     /// Demonstrations that follow no one sequence rule.
     #[error(
-        "the demonstrations follow no one sequence rule: {detail}. A model learns one rule (ascending, descending or a listed priority) from demonstrations that mostly agree: choose blocks that do with --demos (`sequence random` teaches none)"
+        "the demonstrations follow no one sequence rule: {detail}. A model learns one rule (ascending, descending or a listed priority) from demonstrations that mostly agree: choose blocks that do with --demos (blocks with `sequence random` show that any order is right and are left out of this)"
     )]
     ContradictorySequence { detail: String },
     #[error("no {what} `{name}`; {known}")]

@@ -33,6 +33,11 @@ pub struct Lesson {
     /// The chosen demonstrations (indices) that break it: their decisions
     /// are not taught.
     pub exceptions: Vec<usize>,
+    /// The chosen demonstrations (indices) of blocks with `sequence
+    /// random`: they show that any order is right, so they are taught in
+    /// the rule's order and the rule is inferred from the others (the
+    /// inventory's order when there are none).
+    pub any_order: Vec<usize>,
     /// The expert's rehearsals of the products and slots no chosen
     /// demonstration moved ([`rehearsals`]): motion examples only.
     pub rehearsals: Vec<DemonstrationRecord>,
@@ -117,10 +122,44 @@ impl Lesson {
             .collect::<BTreeSet<_>>()
             .into_iter()
             .collect();
+        let any_order: BTreeSet<&str> = manifest
+            .demo_blocks
+            .iter()
+            .filter(|b| b.any_order)
+            .map(|b| b.name.as_str())
+            .collect();
+        let mut chosen = chosen;
+        let any_order: Vec<usize> = chosen
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| any_order.contains(d.block.as_str()))
+            .map(|(k, _)| k)
+            .collect();
+        // The rule comes from the demonstrations that show an order; with
+        // none, the inventory's.
+        let ordered: Vec<usize> = (0..chosen.len())
+            .filter(|k| !any_order.contains(k))
+            .collect();
         let Inferred {
             rule: sequence,
             exceptions,
-        } = sequence_rule(&world, &chosen)?;
+        } = if ordered.is_empty() {
+            Inferred {
+                rule: SequenceRule::Ascending,
+                exceptions: Vec::new(),
+            }
+        } else {
+            let shown: Vec<DemonstrationRecord> =
+                ordered.iter().map(|&k| chosen[k].clone()).collect();
+            let inferred = sequence_rule(&world, &shown)?;
+            Inferred {
+                exceptions: inferred.exceptions.iter().map(|&e| ordered[e]).collect(),
+                rule: inferred.rule,
+            }
+        };
+        for &k in &any_order {
+            follow_rule(&world, &sequence, &mut chosen[k]);
+        }
         let rehearsals = rehearsals(&world, &chosen);
         Ok(Lesson {
             world,
@@ -129,6 +168,7 @@ impl Lesson {
             blocks,
             sequence,
             exceptions,
+            any_order,
             rehearsals,
         })
     }
@@ -296,6 +336,28 @@ fn with_skipped_swapped(graph: &Graph, chosen: Option<usize>) -> Option<Graph> {
     Some(swapped)
 }
 
+/// `demo`'s products handled in `rule`'s order (a demonstration that
+/// shows any order is right, taught as the rule's). Products its
+/// inventory does not list keep their places at the end.
+fn follow_rule(world: &WorldFile, rule: &SequenceRule, demo: &mut DemonstrationRecord) {
+    let Some(inventory) = world.inventories.iter().find(|i| i.name == demo.inventory) else {
+        return;
+    };
+    let names: Vec<&str> = inventory
+        .products
+        .iter()
+        .map(|p| p.product.as_str())
+        .collect();
+    let chain = rule.chain(&names);
+    let place = |name: &str| {
+        chain
+            .iter()
+            .position(|&i| names[i] == name)
+            .unwrap_or(usize::MAX)
+    };
+    demo.sequence.sort_by_key(|n| place(n));
+}
+
 /// Share of the demonstrations a rule must explain to be taught.
 pub const RULE_MAJORITY: f64 = 0.8;
 
@@ -315,14 +377,22 @@ pub struct Inferred {
 /// that was not taught the cell packs it in (`execute`, `eval`). Its
 /// reasoner learned "the first selected product along the chain not yet
 /// in its slot", which is the same function for any rule, so the rule can
-/// come from the cell's own file without training. An error when those
-/// demonstrations follow no one rule.
+/// come from the cell's own file without training. Blocks with `sequence
+/// random` show no order and are left out (`None` when only they teach
+/// the cell). An error when the others follow no one rule.
 pub fn cell_rule(compiled: &Compiled, cell: &str) -> Result<Option<Inferred>> {
+    let any_order: BTreeSet<&str> = compiled
+        .expanded
+        .blocks
+        .iter()
+        .filter(|b| b.any_order)
+        .map(|b| b.name.as_str())
+        .collect();
     let demos: Vec<DemonstrationRecord> =
         emit::demonstration_records(&compiled.model, &compiled.expanded)
             .map_err(|e| PipelineError::Compile(Box::new(e)))?
             .into_iter()
-            .filter(|d| d.cell == cell)
+            .filter(|d| d.cell == cell && !any_order.contains(d.block.as_str()))
             .collect();
     if demos.is_empty() {
         return Ok(None);
@@ -459,6 +529,51 @@ mod tests {
             slots: vec![[0.0, -0.5, 0.0]],
             held_goal: [0.0; 3],
         }
+    }
+
+    /// A demonstration of a `sequence random` block is taught in the
+    /// rule's order: ascending, descending or a priority list.
+    #[test]
+    fn a_demonstration_that_shows_any_order_is_taught_in_the_rules() {
+        use packwright_compiler::artifact::{At, InventoryRecord};
+        let world = WorldFile {
+            schema: "test".into(),
+            version: 0,
+            cells: Vec::new(),
+            products: Vec::new(),
+            inventories: vec![InventoryRecord {
+                name: "inv".into(),
+                cell: "c".into(),
+                products: ["a", "b", "c", "d"]
+                    .map(|p| At {
+                        product: p.into(),
+                        at: [0.0; 3],
+                    })
+                    .to_vec(),
+            }],
+            orders: Vec::new(),
+        };
+        let demo = DemonstrationRecord {
+            block: "shuffled".into(),
+            cell: "c".into(),
+            inventory: "inv".into(),
+            assignment: Vec::new(),
+            sequence: ["c", "a", "d"].map(String::from).to_vec(),
+            human_packed: Vec::new(),
+            missing: Vec::new(),
+            start: Vec::new(),
+            first_sample: 0,
+            samples: 0,
+        };
+        let taught = |rule: SequenceRule| {
+            let mut d = demo.clone();
+            follow_rule(&world, &rule, &mut d);
+            d.sequence
+        };
+        assert_eq!(taught(SequenceRule::Ascending), ["a", "c", "d"]);
+        assert_eq!(taught(SequenceRule::Descending), ["d", "c", "a"]);
+        let listed = SequenceRule::Listed(["d", "a"].map(String::from).to_vec());
+        assert_eq!(taught(listed), ["d", "a", "c"]);
     }
 
     /// The products after the chosen one are left out, so that it is last

@@ -128,6 +128,18 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
             report.training_s
         );
         outln!("  sequence rule taught: {}", report.sequence);
+        if report.any_order > 0 {
+            outln!(
+                "  any order: {} of {} demonstrations come from blocks with `sequence random`; taught in the rule's order{}",
+                report.any_order,
+                report.demonstrations,
+                if report.any_order == report.demonstrations {
+                    " (the inventory's: no demonstration shows an order)"
+                } else {
+                    ", inferred from the others"
+                }
+            );
+        }
         if report.rehearsals > 0 {
             outln!(
                 "  rehearsed by the expert: {} of {} orders of the products and slots no demonstration moved (motion examples only)",

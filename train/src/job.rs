@@ -23,6 +23,9 @@ pub struct TrainingReport {
     /// Indices (among the chosen demonstrations) the expert could not
     /// replay.
     pub replay_failures: Vec<usize>,
+    /// Demonstrations of blocks with `sequence random` (any order right):
+    /// taught in the rule's order, and left out of its inference.
+    pub any_order: usize,
     /// The expert's rehearsals of the products and slots no demonstration
     /// moved (motion examples only), and how many it completed.
     pub rehearsals: usize,
@@ -270,6 +273,7 @@ pub fn run(
         demonstrations: lesson.chosen.len(),
         replayed: lesson.chosen.len() - failures.len(),
         replay_failures: failures,
+        any_order: lesson.any_order.len(),
         rehearsals: lesson.rehearsals.len(),
         rehearsed: replayed.rehearsals_completed(),
         replay_s: replayed.seconds,

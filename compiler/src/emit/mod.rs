@@ -312,6 +312,7 @@ fn manifest(sources: &SourceMap, m: &Model, ex: &Expanded, shape: Shape) -> Mani
             first_demonstration: b.first_demo,
             demonstrations: b.demos,
             samples: 2 * b.handled,
+            any_order: b.any_order,
         })
         .collect();
     Manifest {

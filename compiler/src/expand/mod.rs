@@ -92,6 +92,9 @@ pub struct DemoBlock {
     pub handled: usize,
     /// The most products present in one of its demonstrations.
     pub most_present: usize,
+    /// A `demos` block with `sequence random`: its demonstrations show
+    /// that any order is right, not an order to learn.
+    pub any_order: bool,
 }
 
 #[derive(Debug, Clone)]
@@ -149,6 +152,7 @@ pub fn expand(m: &Model) -> Result<Expanded, Vec<Error>> {
             demos: 1,
             handled: d.sequence.len(),
             most_present: m.inventories[order.inventory].entries.len(),
+            any_order: false,
         });
     }
     // Every block's size is counted before anything is generated: one
@@ -331,6 +335,7 @@ fn demo_set(m: &Model, index: usize, d: &DemosDef, first_demo: usize) -> Result<
         demos: 0,
         handled: 0,
         most_present: 0,
+        any_order: d.sequence == packwright_grammar::ast::SequenceMode::Random,
     };
     let entries = m.inventories[d.inventory].entries.len();
     for demo in demonstrations::generated(m, d, kept) {
