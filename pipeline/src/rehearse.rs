@@ -11,82 +11,96 @@
 //! has it rehearse the rest too: motion examples only, never decisions
 //! for the reasoner, whose lessons stay the person's.
 
-use packwright_compiler::artifact::{Assignment, At, DemonstrationRecord, WorldFile};
+use packwright_compiler::artifact::{Assignment, At, DemonstrationRecord, SlotRecord, WorldFile};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// The block name rehearsals carry (no `demo` or `demos` block can have
 /// it: it is not an identifier of the language).
 pub const REHEARSAL: &str = "(rehearsal)";
 
-/// What the chosen demonstrations of one inventory moved.
-#[derive(Default)]
-struct Covered<'a> {
-    cell: &'a str,
-    products: BTreeSet<&'a str>,
-    slots: BTreeSet<&'a str>,
-    /// The most products one demonstration packed.
-    most: usize,
-}
+/// A product waiting within this distance (m) of where it was moved from
+/// is not rehearsed again (the same product at the same place in
+/// another inventory of the cell).
+const SAME_PLACE: f64 = 0.01;
 
-/// The expert's rehearsals for `chosen`: per inventory they use, orders
-/// that move each of its products and each of its cell's slots that no
-/// chosen demonstration moved, at least once (paired in listed order,
-/// topped up with ones already moved where one side runs out), every
-/// product at its inventory position, packed in listed order, as many per
-/// order as the most a chosen demonstration packed. Empty when the
-/// demonstrations moved every product and slot; deterministic.
+/// The expert's rehearsals for `chosen`: for each inventory of the cells
+/// they teach (in file order, those the demonstrations use or not),
+/// orders that move each of its products and each of its cell's slots
+/// that neither a chosen demonstration nor an earlier rehearsal moved
+/// (a product from where it waits in that inventory, within
+/// [`SAME_PLACE`]), at
+/// least once (paired in listed order, topped up with ones already moved
+/// where one side runs out), every product at its inventory position,
+/// packed in listed order, as many per order as the most a chosen
+/// demonstration of the cell packed. Empty when the demonstrations moved
+/// every product of every inventory and every slot; deterministic.
 pub fn rehearsals(world: &WorldFile, chosen: &[DemonstrationRecord]) -> Vec<DemonstrationRecord> {
-    let mut covered: BTreeMap<&str, Covered> = BTreeMap::new();
+    // Products moved so far (cell, product, where it waits: one waiting
+    // where another inventory has it is moved there too), (cell, slot)
+    // pairs moved so far, and the most products one demonstration of a
+    // cell packed.
+    let mut products_moved: Vec<(&str, &str, [f64; 3])> = Vec::new();
+    let mut slots_moved: BTreeSet<(&str, &str)> = BTreeSet::new();
+    let mut most: BTreeMap<&str, usize> = BTreeMap::new();
+    let waiting = |inventory: &str, product: &str| {
+        world
+            .inventories
+            .iter()
+            .find(|i| i.name == inventory)
+            .and_then(|i| i.products.iter().find(|p| p.product == product))
+            .map(|p| p.at)
+    };
     for d in chosen {
-        let c = covered.entry(&d.inventory).or_default();
-        c.cell = &d.cell;
         for a in &d.assignment {
             if d.sequence.contains(&a.product) {
-                c.products.insert(&a.product);
-                c.slots.insert(&a.slot);
+                if let Some(at) = waiting(&d.inventory, &a.product) {
+                    products_moved.push((&d.cell, &a.product, at));
+                }
+                slots_moved.insert((&d.cell, &a.slot));
             }
         }
-        c.most = c.most.max(d.sequence.len());
+        let m = most.entry(&d.cell).or_default();
+        *m = (*m).max(d.sequence.len());
     }
     let mut out = Vec::new();
-    for (inventory, c) in covered {
-        let (Some(inv), Some(cell)) = (
-            world.inventories.iter().find(|i| i.name == inventory),
-            world.cells.iter().find(|cell| cell.name == c.cell),
+    for inv in &world.inventories {
+        let (Some(&most), Some(cell)) = (
+            most.get(inv.cell.as_str()),
+            world.cells.iter().find(|c| c.name == inv.cell),
         ) else {
             continue;
         };
+        let moved = |p: &&At| {
+            products_moved.iter().any(|&(c, name, at)| {
+                c == inv.cell
+                    && name == p.product
+                    && (at[0] - p.at[0]).hypot(at[1] - p.at[1]) < SAME_PLACE
+            })
+        };
+        let unmoved_products = inv.products.iter().filter(|p| !moved(p)).count();
         // Not yet moved first, then the moved ones to top up with.
         let products: Vec<&At> = inv
             .products
             .iter()
-            .filter(|p| !c.products.contains(p.product.as_str()))
-            .chain(
-                inv.products
-                    .iter()
-                    .filter(|p| c.products.contains(p.product.as_str())),
-            )
+            .filter(|p| !moved(p))
+            .chain(inv.products.iter().filter(moved))
             .collect();
-        let slots: Vec<_> = cell
+        let slot_moved =
+            |s: &&SlotRecord| slots_moved.contains(&(cell.name.as_str(), s.name.as_str()));
+        let unmoved_slots = cell.slots.iter().filter(|s| !slot_moved(s)).count();
+        let slots: Vec<&SlotRecord> = cell
             .slots
             .iter()
-            .filter(|s| !c.slots.contains(s.name.as_str()))
-            .chain(
-                cell.slots
-                    .iter()
-                    .filter(|s| c.slots.contains(s.name.as_str())),
-            )
+            .filter(|s| !slot_moved(s))
+            .chain(cell.slots.iter().filter(slot_moved))
             .collect();
-        let unmoved = |n: usize, moved: usize| n - moved.min(n);
-        let pairs =
-            unmoved(products.len(), c.products.len()).max(unmoved(slots.len(), c.slots.len()));
-        // Consecutive pairs are distinct products and distinct slots as
-        // long as an order holds no more than either list.
-        let per_order = c.most.clamp(1, products.len().min(slots.len()).max(1));
         if products.is_empty() || slots.is_empty() {
             continue;
         }
-        let pairs: Vec<(&At, _)> = (0..pairs)
+        // Consecutive pairs are distinct products and distinct slots as
+        // long as an order holds no more than either list.
+        let per_order = most.clamp(1, products.len().min(slots.len()));
+        let pairs: Vec<(&At, &SlotRecord)> = (0..unmoved_products.max(unmoved_slots))
             .map(|i| (products[i % products.len()], slots[i % slots.len()]))
             .collect();
         for group in pairs.chunks(per_order) {
@@ -115,8 +129,8 @@ pub fn rehearsals(world: &WorldFile, chosen: &[DemonstrationRecord]) -> Vec<Demo
                 .collect();
             out.push(DemonstrationRecord {
                 block: REHEARSAL.to_owned(),
-                cell: c.cell.to_owned(),
-                inventory: inventory.to_owned(),
+                cell: cell.name.clone(),
+                inventory: inv.name.clone(),
                 assignment,
                 sequence,
                 human_packed: Vec::new(),
@@ -126,6 +140,10 @@ pub fn rehearsals(world: &WorldFile, chosen: &[DemonstrationRecord]) -> Vec<Demo
                 samples: 0,
             });
         }
+        for (p, s) in pairs {
+            products_moved.push((&cell.name, &p.product, p.at));
+            slots_moved.insert((&cell.name, &s.name));
+        }
     }
     out
 }
@@ -134,7 +152,7 @@ pub fn rehearsals(world: &WorldFile, chosen: &[DemonstrationRecord]) -> Vec<Demo
 mod tests {
     use super::*;
     use packwright_compiler::artifact::{
-        CellRecord, InventoryRecord, ProductRecord, RectRecord, RobotRecord, SlotRecord,
+        CellRecord, InventoryRecord, ProductRecord, RectRecord, RobotRecord,
     };
 
     fn world(products: usize, slots: usize) -> WorldFile {
@@ -252,6 +270,37 @@ mod tests {
             assert_eq!(order.sequence, listed, "listed order");
         }
         assert_eq!(rehearsals(&w, std::slice::from_ref(&d)), r, "deterministic");
+    }
+
+    /// An inventory of the taught cell that no demonstration used is
+    /// rehearsed too: its products each once, but one waiting where a
+    /// demonstration moved it from not again (p0), nor the slots the
+    /// first inventory's rehearsals moved.
+    #[test]
+    fn another_inventory_of_the_cell_is_rehearsed_too() {
+        let mut w = world(4, 4);
+        let mut other = w.inventories[0].clone();
+        other.name = "other".into();
+        for p in other.products.iter_mut().skip(1) {
+            p.at[0] = 0.7;
+        }
+        w.inventories.push(other);
+        let d = demo(&w, &[(0, 0), (1, 1)]);
+        let r = rehearsals(&w, std::slice::from_ref(&d));
+        let of = |inventory: &str| -> Vec<&DemonstrationRecord> {
+            r.iter().filter(|o| o.inventory == inventory).collect()
+        };
+        let (products, slots) = moved(&of("inv").into_iter().cloned().collect::<Vec<_>>());
+        assert_eq!(products, ["p2", "p3"].map(String::from).into());
+        assert_eq!(slots, ["s2", "s3"].map(String::from).into());
+        let (products, _) = moved(&of("other").into_iter().cloned().collect::<Vec<_>>());
+        assert_eq!(products, ["p1", "p2", "p3"].map(String::from).into());
+        assert_eq!(of("other").len(), 2, "three products, two per order");
+        assert!(
+            of("other")
+                .iter()
+                .all(|o| o.start == w.inventories[1].products)
+        );
     }
 
     /// Demonstrations that moved every product and slot leave nothing to
