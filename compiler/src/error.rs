@@ -166,6 +166,15 @@ pub enum Error {
         min: f64,
         max: f64,
     },
+    #[error("{what} reaches {} from the robot's base, farther than any arm packs ({max} m)", metres(*.distance))]
+    FarFromBase {
+        at: Loc,
+        what: String,
+        /// The farthest point's distance from the base, or the box's
+        /// largest dimension if that is larger (m).
+        distance: f64,
+        max: f64,
+    },
     #[error("the robot cannot reach {pose} {task}")]
     Unreachable {
         at: Loc,
@@ -303,6 +312,7 @@ impl Error {
             Error::ProductsOverlap { .. } => "E035",
             Error::OutOfReach { .. } => "E036",
             Error::Unreachable { .. } => "E039",
+            Error::FarFromBase { .. } => "E054",
             Error::StartBlocked { .. } => "E053",
             Error::DoesNotFit { .. } => "E037",
             Error::PlacedOverlap { .. } => "E038",
@@ -350,6 +360,7 @@ impl Error {
             | Error::ProductsOverlap { at, .. }
             | Error::OutOfReach { at, .. }
             | Error::Unreachable { at, .. }
+            | Error::FarFromBase { at, .. }
             | Error::StartBlocked { at, .. }
             | Error::DoesNotFit { at, .. }
             | Error::PlacedOverlap { at, .. }
@@ -400,6 +411,7 @@ impl Error {
                 "too close to the base".into()
             }
             Error::OutOfReach { .. } => "too far from the base".into(),
+            Error::FarFromBase { .. } => "far beyond any arm's reach".into(),
             Error::Unreachable { tip, .. } => format!(
                 "the tool tip would be at ({:.3}, {:.3}, {:.3})",
                 tip[0], tip[1], tip[2]
@@ -472,6 +484,7 @@ impl Error {
             Error::OutsidePending { .. } => "move the product so that its whole footprint is inside the `pending` area, or enlarge the area".into(),
             Error::ProductsOverlap { .. } => "move one of them; footprints (centre ± half the width and depth) must not overlap".into(),
             Error::OutOfReach { min, max, .. } => format!("the UR10 reaches between {min:.2} m and {max:.2} m from its base axis; move it or the `base`"),
+            Error::FarFromBase { max, .. } => format!("check the number and its unit: lengths and positions are metres unless they carry `mm` or `cm` (`0.65`, `650 mm`); every pending area and box lies within {max} m of the cell's `base`"),
             Error::Unreachable { pose: Pose::Start, .. } => "the arm starts with its cup 0.35 m over the middle of the `pending` area: bring the area nearer the robot's base (or the `base` nearer the area)".into(),
             Error::Unreachable { pose, .. } if pose.is_picking() => "move the product nearer the robot's base (or the `base` nearer the products), or lower the cell's `lift`; the cup (`suction`) reaches down from the wrist, so a shorter cup reaches further".into(),
             Error::Unreachable { pose: Pose::Approach, .. } => "the robot carries the product round its base axis, at the lift's height or clear of the box's rim if that is higher, half-way between the product and the slot: bring the product and the slot nearer each other, lower the cell's `lift`, or use a lower box".into(),
@@ -516,4 +529,14 @@ fn quoted(names: &[String]) -> String {
         .map(|n| format!("`{n}`"))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// A length for a message: metres with millimetres, or in scientific
+/// notation when it is far too large to read that way.
+fn metres(m: f64) -> String {
+    if m.abs() < 1e6 {
+        format!("{m:.3} m")
+    } else {
+        format!("{m:.1e} m")
+    }
 }

@@ -29,6 +29,11 @@ pub const DEFAULT_RELEASE_SETTLE: f64 = 0.5;
 pub const SETTLE_RANGE: (f64, f64) = (0.0, 5.0);
 /// The descent speeds a cell may declare, as shares of its speed.
 pub const DESCENT_RANGE: (f64, f64) = (0.01, 1.0);
+/// How far from its base (m) any arm packs: no pending area or box of a
+/// cell may reach farther, nor a box be larger (the longest industrial
+/// arms reach about 4 m). A length beyond it is a typo: a unit left out
+/// or the wrong one.
+pub const WORKSPACE_RADIUS: f64 = 10.0;
 /// How many joints the arm has: an `acceleration` or `jerk` statement
 /// gives one value per joint.
 pub const ARM_JOINTS: usize = 6;

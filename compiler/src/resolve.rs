@@ -231,6 +231,50 @@ fn xy(p: &ast::Point) -> [f64; 2] {
     [p.x.metres, p.y.metres]
 }
 
+/// Whether the pending area and every box lie within
+/// [`WORKSPACE_RADIUS`] of the base (and every box is smaller); else an
+/// error for each that does not. Farther lengths are typos, and would
+/// make every later distance and picture meaningless.
+fn within_workspace(
+    base: [f64; 3],
+    pending: Rect,
+    pending_at: Loc,
+    boxes: &[BoxDef],
+    errors: &mut Vec<Error>,
+) -> bool {
+    let farthest = |r: &Rect| {
+        let dx = (r.min[0] - base[0]).abs().max((r.max[0] - base[0]).abs());
+        let dy = (r.min[1] - base[1]).abs().max((r.max[1] - base[1]).abs());
+        dx.hypot(dy)
+    };
+    let mut far = vec![(
+        "the pending area".to_string(),
+        pending_at,
+        farthest(&pending),
+    )];
+    for b in boxes {
+        let size = b.size.iter().copied().fold(0.0, f64::max);
+        far.push((
+            format!("box `{}`", b.name),
+            b.loc,
+            farthest(&b.footprint()).max(size),
+        ));
+    }
+    let mut ok = true;
+    for (what, at, distance) in far {
+        if distance.is_nan() || distance > WORKSPACE_RADIUS {
+            errors.push(Error::FarFromBase {
+                at,
+                what,
+                distance,
+                max: WORKSPACE_RADIUS,
+            });
+            ok = false;
+        }
+    }
+    ok
+}
+
 impl Resolver<'_> {
     fn positive(&mut self, value: f64, at: Loc, what: &str) -> bool {
         if value > 0.0 {
@@ -518,6 +562,7 @@ impl Resolver<'_> {
         let item = format!("cell `{}`", c.name.text);
         let e = &mut self.errors;
         let robot_at = robot_path_at.or(robot.loc()).unwrap_or(at);
+        let pending_at = pending.loc().unwrap_or(block);
         let robot = robot.required(block, item.clone(), "robot ur10", e);
         let base = base.required(block, item.clone(), "base (0, 0, 0)", e);
         let suction = suction.required(block, item.clone(), "suction 100 mm", e);
@@ -550,6 +595,9 @@ impl Resolver<'_> {
                 example: "slot g1 (0.00, 0.60)",
             });
             ok = false;
+        }
+        if let (Some(base), Some(pending)) = (base, pending) {
+            ok &= within_workspace(base, pending, pending_at, &boxes, e);
         }
         let (Some(robot), Some(base), Some(suction), Some(pending), true) =
             (robot, base, suction, pending, ok)

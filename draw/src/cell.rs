@@ -166,6 +166,11 @@ fn check(picture: &Picture) -> Result<(), DrawError> {
     Ok(())
 }
 
+/// The longest extent (m) a picture holds along any axis: at true scale
+/// ([`SCALE`] pixels a metre) a longer one would be a picture of millions
+/// of pixels with a grid line every 0.1 m, and a cell is a few metres.
+pub const MAX_SPAN: f64 = 50.0;
+
 /// The picture as an SVG document: the top view, the side view below it
 /// (looking across the longer horizontal extent of the cell's contents),
 /// and a legend with every diagnostic.
@@ -247,6 +252,15 @@ pub fn picture(picture: &Picture) -> Result<String, DrawError> {
         ],
     );
     add(&mut bounds, [c.base[0] + reach, c.base[1] + reach, 0.0]);
+    for (span, axis) in bounds.iter().zip(['x', 'y', 'z']) {
+        if span.len() > MAX_SPAN {
+            return Err(DrawError::TooLarge {
+                axis,
+                metres: span.len(),
+                max: MAX_SPAN,
+            });
+        }
+    }
     let [xs, ys, zs] = bounds;
     let (xs, ys) = (xs.grown(0.05), ys.grown(0.05));
     let zs = Span {

@@ -242,6 +242,28 @@ fn non_finite_input_is_refused() {
     assert!(matches!(picture(&p), Err(DrawError::BadIndex { .. })));
 }
 
+#[test]
+fn a_picture_too_large_to_draw_at_true_scale_is_refused_at_once() {
+    // A pending area 10^20 m out (a unit lost in a typo) would be a
+    // picture of 10^23 pixels with 10^21 grid lines.
+    let mut p = small_picture();
+    p.cell.pending.0[0] = 1e20;
+    assert!(matches!(
+        picture(&p),
+        Err(DrawError::TooLarge { axis: 'x', .. })
+    ));
+    let mut p = small_picture();
+    p.cell.boxes[0].size[2] = 60.0;
+    assert!(matches!(
+        picture(&p),
+        Err(DrawError::TooLarge { axis: 'z', .. })
+    ));
+    // A large cell that is still a cell is drawn.
+    let mut p = small_picture();
+    p.cell.boxes[0].size[2] = 5.0;
+    assert!(picture(&p).is_ok());
+}
+
 fn rates() -> Vec<SuccessRate> {
     let r = |suite: &str, planner: &str, rate: f64, low: f64, high: f64| SuccessRate {
         suite: suite.into(),
