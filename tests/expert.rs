@@ -133,3 +133,36 @@ order one for inv {
         }
     }
 }
+
+/// Where the straight motion and both swings collide, the expert searches
+/// (RRT-Connect, seeded by the sub-goal) instead of ending the package: it
+/// gave up on `tests/cells/deep_wall.pack`'s order before, which is the
+/// cell's one demonstration, so `train` could not replay it.
+#[test]
+fn the_expert_searches_where_every_straight_way_collides() {
+    let run = || {
+        packwright(&[
+            "execute",
+            "tests/cells/deep_wall.pack",
+            "--order",
+            "wall_side",
+            "--planner",
+            "expert",
+            "--json",
+        ])
+    };
+    let out = run();
+    assert!(
+        out.status.success(),
+        "exit {:?}\n{}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout)
+    );
+    // Seeded: the same motion every run (the simulated time to the
+    // millisecond; planning times are wall-clock).
+    let time = |stdout: &[u8]| {
+        let report: serde_json::Value = serde_json::from_slice(stdout).expect("JSON");
+        report["time_s"].as_f64().expect("time_s")
+    };
+    assert_eq!(time(&run().stdout), time(&out.stdout));
+}

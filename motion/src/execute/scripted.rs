@@ -1,7 +1,8 @@
 //! The expert's and RRT-Connect's loop: the next product by the
 //! demonstrated sequence rule (inventory order), the expert's three
 //! sub-goals per stage, the inverse-kinematics branch nearest the current
-//! joints among the free ones, joined straight or by RRT-Connect; the
+//! joints among the free ones, joined straight or by RRT-Connect (the
+//! expert searches too where every straight way collides); the
 //! expert's runs can be recorded as motion demonstrations.
 
 use super::station::{
@@ -207,16 +208,32 @@ impl<W: World> Scripted<'_, W> {
                 straight => straight,
             };
             let planned_joints = planned.solved.joints;
-            let routed = if replanned {
+            let solved = if replanned {
                 self.station
                     .solve(&planned.goal, k + 1, &start, yaw, load, planned.ceiling)
             } else {
                 Ok(planned.solved)
-            }
-            .and_then(|solved| {
+            };
+            let routed = solved.clone().and_then(|solved| {
                 self.station
                     .route_solved(how, k + 1, start, solved, yaw, load)
             });
+            // The expert's last resort: where the straight motion and both
+            // swings collide (a wrist over a deep box's wall), RRT-Connect's
+            // search, seeded by the sub-goal so that runs stay
+            // reproducible; a package, or a demonstration's replay, is not
+            // ended for a motion a search finds. If that fails too, the
+            // straight motion's collision is the reason.
+            let routed = match (how, routed) {
+                (Connect::Straight, Err(why @ Failure::WouldCollide { .. })) => solved
+                    .and_then(|solved| {
+                        let search = Connect::Rrt { seed: k as u64 };
+                        self.station
+                            .route_solved(search, k + 1, start, solved, yaw, load)
+                    })
+                    .map_err(|_| why),
+                (_, routed) => routed,
+            };
             let elapsed = self.station.spend(k + 1, started)?;
             self.station
                 .timing
