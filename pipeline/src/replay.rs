@@ -10,14 +10,23 @@ use packwright_motion::execute;
 use packwright_nets::{ActionExample, SubGoalExample};
 use rayon::prelude::*;
 
-/// One demonstration replayed by the expert: its motion log, or `None` if
-/// the expert could not complete it.
-pub fn replay(world: &WorldFile, demo: &DemonstrationRecord) -> Result<Option<MotionLog>> {
+/// An expert replay: its motion log, or, for people, why the expert could
+/// not complete it (its report's first problem).
+pub type Replay = std::result::Result<MotionLog, String>;
+
+/// One demonstration replayed by the expert.
+pub fn replay(world: &WorldFile, demo: &DemonstrationRecord) -> Result<Replay> {
     let ep = demonstration_episode(world, demo)?;
     let mut sim = ep.simulator(ep.home()?)?;
     let mut log = MotionLog::default();
     let report = execute::run_recorded(&mut sim, &ep.arm, &ep.task, &mut log);
-    Ok(report.complete.then_some(log))
+    Ok(if report.complete {
+        Ok(log)
+    } else {
+        Err(report
+            .first_problem()
+            .unwrap_or_else(|| "the package is not complete".into()))
+    })
 }
 
 /// Replays `demos` in parallel (rayon); `tick` is called after each. The
@@ -26,7 +35,7 @@ pub fn replay_all(
     world: &WorldFile,
     demos: &[&DemonstrationRecord],
     tick: &(dyn Fn() + Sync),
-) -> Result<Vec<Option<MotionLog>>> {
+) -> Result<Vec<Replay>> {
     demos
         .par_iter()
         .map(|d| {

@@ -15,7 +15,9 @@ use packwright_interface::record::MotionLog;
 use packwright_interface::{Graph, SequenceRule, world::Seen};
 use packwright_motion::execute::demonstrated_decisions;
 use packwright_nets::{GraphExample, Task, TrainingSet};
+use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet};
+use std::fmt;
 use std::path::Path;
 use std::time::Instant;
 
@@ -50,7 +52,45 @@ pub struct Replayed {
     pub logs: Vec<Option<MotionLog>>,
     /// Per rehearsal, the same.
     pub rehearsed: Vec<Option<MotionLog>>,
+    /// Why the expert could not complete a chosen demonstration (its
+    /// index) or a rehearsal, for people.
+    pub problems: Vec<ReplayProblem>,
     pub seconds: f64,
+}
+
+/// A replay the expert could not complete.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReplayProblem {
+    /// A rehearsal (an index into the lesson's rehearsals), or a chosen
+    /// demonstration (an index into the chosen ones).
+    pub rehearsal: bool,
+    pub index: usize,
+    /// The block it comes from.
+    pub block: String,
+    /// Its products in the order packed.
+    pub sequence: Vec<String>,
+    /// The run's first problem, for people.
+    pub why: String,
+}
+
+impl fmt::Display for ReplayProblem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let n = self.index + 1;
+        let products = self.sequence.join(", ");
+        if self.rehearsal {
+            write!(
+                f,
+                "the expert could not complete rehearsal {n} ({products})"
+            )?;
+        } else {
+            write!(
+                f,
+                "the expert could not replay demonstration {n} (`{}`: {products})",
+                self.block
+            )?;
+        }
+        write!(f, ": {}", self.why)
+    }
 }
 
 impl Replayed {
@@ -178,11 +218,33 @@ impl Lesson {
     pub fn replay(&self, tick: &(dyn Fn() + Sync)) -> Result<Replayed> {
         let started = Instant::now();
         let demos: Vec<&DemonstrationRecord> = self.chosen.iter().chain(&self.rehearsals).collect();
-        let mut logs = replay_all(&self.world, &demos, tick)?;
+        let mut problems = Vec::new();
+        let mut logs = Vec::with_capacity(demos.len());
+        for (i, (replay, demo)) in replay_all(&self.world, &demos, tick)?
+            .into_iter()
+            .zip(&demos)
+            .enumerate()
+        {
+            let rehearsal = i >= self.chosen.len();
+            match replay {
+                Ok(log) => logs.push(Some(log)),
+                Err(why) => {
+                    logs.push(None);
+                    problems.push(ReplayProblem {
+                        rehearsal,
+                        index: if rehearsal { i - self.chosen.len() } else { i },
+                        block: demo.block.clone(),
+                        sequence: demo.sequence.clone(),
+                        why,
+                    });
+                }
+            }
+        }
         let rehearsed = logs.split_off(self.chosen.len());
         Ok(Replayed {
             logs,
             rehearsed,
+            problems,
             seconds: started.elapsed().as_secs_f64(),
         })
     }

@@ -30,7 +30,24 @@ pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
     if !args.json {
         errln!();
     }
+    let mut problems = Vec::new();
+    let logs = logs
+        .into_iter()
+        .enumerate()
+        .map(|(i, replay)| {
+            replay
+                .map_err(|why| {
+                    problems.push(format!("demonstration {i} ({}): {why}", demos[i].block))
+                })
+                .ok()
+        })
+        .collect();
     let (log, demo_of, failed) = merge(logs);
+    if !args.json {
+        for p in &problems {
+            errln!("error: the expert could not replay {p}");
+        }
+    }
     write_file_atomically(&args.output, &motion_file(&log, &demo_of)?)?;
     if args.json {
         outln!(
@@ -39,6 +56,7 @@ pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
                 "output": args.output.display().to_string(),
                 "demonstrations": total,
                 "failed": failed,
+                "problems": problems,
                 "subgoals": log.subgoals.len(),
                 "actions": log.actions.len(),
             })

@@ -201,6 +201,11 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
     for w in &report.warnings {
         errln!("warning: {w}");
     }
+    // A demonstration not replayed leaves its motion out of the model
+    // (exit 1); a rehearsal not completed only teaches less.
+    for p in &report.replay_problems {
+        errln!("{}: {p}", if p.rehearsal { "warning" } else { "error" });
+    }
     Ok(if report.replay_failures.is_empty() {
         Exit::Success
     } else {

@@ -7,7 +7,7 @@ use crate::training::{Metrics, Network, NetworkMetrics, Progress, TrainError, tr
 use crate::{RoundMetrics, Trained};
 use packwright_nets::TrainConfig;
 use packwright_pipeline::PipelineError;
-use packwright_pipeline::teach::{Lesson, Replayed};
+use packwright_pipeline::teach::{Lesson, ReplayProblem, Replayed};
 use serde::Serialize;
 
 /// `metrics.json` (schema `packwright.metrics/2`).
@@ -23,6 +23,8 @@ pub struct TrainingReport {
     /// Indices (among the chosen demonstrations) the expert could not
     /// replay.
     pub replay_failures: Vec<usize>,
+    /// Why each failed replay (of a demonstration or a rehearsal) failed.
+    pub replay_problems: Vec<ReplayProblem>,
     /// Demonstrations of blocks with `sequence random` (any order right):
     /// taught in the rule's order, and left out of its inference.
     pub any_order: usize,
@@ -273,6 +275,7 @@ pub fn run(
         demonstrations: lesson.chosen.len(),
         replayed: lesson.chosen.len() - failures.len(),
         replay_failures: failures,
+        replay_problems: replayed.problems.clone(),
         any_order: lesson.any_order.len(),
         rehearsals: lesson.rehearsals.len(),
         rehearsed: replayed.rehearsals_completed(),
