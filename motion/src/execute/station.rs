@@ -497,8 +497,10 @@ impl<'a, W: World> Station<'a, W> {
     /// shape kept (the wrist keeping the cup's yaw), then the rest of the
     /// motion, or the rest first and the swing last. On a front-to-back
     /// swing the straight line folds the wrist into the forearm half-way,
-    /// where the arm held in shape sweeps clear. The expert then gives up
-    /// with the straight motion's collision; RRT-Connect searches. Every
+    /// where the arm held in shape sweeps clear. `Connect::Straight` then
+    /// gives up with the straight motion's collision (the expert's loop
+    /// searches after every other solution failed too, `scripted.rs`);
+    /// `Connect::Rrt` searches. Every
     /// candidate is checked once, as the commands that will be sent.
     pub fn route(
         &self,
