@@ -214,7 +214,10 @@ impl<W: World> Scripted<'_, W> {
             } else {
                 Ok(planned.solved)
             };
-            let routed = solved.clone().and_then(|solved| {
+            // The joints alone are kept for a search: a solve's straight
+            // route matched nothing if routing from `start` failed.
+            let target = solved.as_ref().ok().map(|s| s.joints);
+            let routed = solved.and_then(|solved| {
                 self.station
                     .route_solved(how, k + 1, start, solved, yaw, load)
             });
@@ -224,15 +227,14 @@ impl<W: World> Scripted<'_, W> {
             // reproducible; a package, or a demonstration's replay, is not
             // ended for a motion a search finds. If that fails too, the
             // straight motion's collision is the reason.
-            let routed = match (how, routed) {
-                (Connect::Straight, Err(why @ Failure::WouldCollide { .. })) => solved
-                    .and_then(|solved| {
-                        let search = Connect::Rrt { seed: k as u64 };
-                        self.station
-                            .route_solved(search, k + 1, start, solved, yaw, load)
-                    })
-                    .map_err(|_| why),
-                (_, routed) => routed,
+            let routed = match (how, routed, target) {
+                (Connect::Straight, Err(why @ Failure::WouldCollide { .. }), Some(target)) => {
+                    let search = Connect::Rrt { seed: k as u64 };
+                    self.station
+                        .route_any(search, k + 1, start, target, yaw, load)
+                        .map_err(|_| why)
+                }
+                (_, routed, _) => routed,
             };
             let elapsed = self.station.spend(k + 1, started)?;
             self.station
