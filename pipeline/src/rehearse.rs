@@ -77,23 +77,10 @@ pub fn rehearsals(world: &WorldFile, chosen: &[DemonstrationRecord]) -> Vec<Demo
                     && (at[0] - p.at[0]).hypot(at[1] - p.at[1]) < SAME_PLACE
             })
         };
-        let unmoved_products = inv.products.iter().filter(|p| !moved(p)).count();
-        // Not yet moved first, then the moved ones to top up with.
-        let products: Vec<&At> = inv
-            .products
-            .iter()
-            .filter(|p| !moved(p))
-            .chain(inv.products.iter().filter(moved))
-            .collect();
-        let slot_moved =
-            |s: &&SlotRecord| slots_moved.contains(&(cell.name.as_str(), s.name.as_str()));
-        let unmoved_slots = cell.slots.iter().filter(|s| !slot_moved(s)).count();
-        let slots: Vec<&SlotRecord> = cell
-            .slots
-            .iter()
-            .filter(|s| !slot_moved(s))
-            .chain(cell.slots.iter().filter(slot_moved))
-            .collect();
+        let (products, unmoved_products) = unmoved_first(&inv.products, moved);
+        let (slots, unmoved_slots) = unmoved_first(&cell.slots, |s: &&SlotRecord| {
+            slots_moved.contains(&(cell.name.as_str(), s.name.as_str()))
+        });
         if products.is_empty() || slots.is_empty() {
             continue;
         }
@@ -146,6 +133,15 @@ pub fn rehearsals(world: &WorldFile, chosen: &[DemonstrationRecord]) -> Vec<Demo
         }
     }
     out
+}
+
+/// `items` not yet `moved` first, then the moved ones to top up with, and
+/// how many were not yet moved.
+fn unmoved_first<T>(items: &[T], moved: impl Fn(&&T) -> bool) -> (Vec<&T>, usize) {
+    let (mut first, then): (Vec<&T>, Vec<&T>) = items.iter().partition(|i| !moved(i));
+    let unmoved = first.len();
+    first.extend(then);
+    (first, unmoved)
 }
 
 #[cfg(test)]
