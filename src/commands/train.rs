@@ -10,7 +10,7 @@ use packwright_compiler::emit::Artifact;
 use packwright_motion::execute::MAX_POLICY_STEPS;
 use packwright_nets::TrainConfig;
 use packwright_pipeline::teach::Lesson;
-use packwright_train::{Network, NetworkMetrics, Progress, job};
+use packwright_train::{Network, Progress, job};
 
 fn bar(len: u64, quiet: bool, template: &str) -> ProgressBar {
     let bar = ProgressBar::with_draw_target(
@@ -147,18 +147,9 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
                 report.rehearsals
             );
         }
-        // Figures on held-out samples, or on the training samples where
-        // there were too few to hold some out.
-        let on = |m: &NetworkMetrics| {
-            if m.valid_samples == 0 {
-                "training"
-            } else {
-                "held-out"
-            }
-        };
         outln!(
             "  reasoner: {} accuracy {:.3} ({} samples, best epoch {}/{})",
-            on(&report.reasoner),
+            report.reasoner.figures_on(),
             report.reasoner.valid_metric,
             report.samples.graphs,
             report.reasoner.best_epoch,
@@ -166,7 +157,7 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
         );
         outln!(
             "  sub-goal planner: {} mean error {:.1} mm ({} samples, best epoch {}/{})",
-            on(&report.subgoal),
+            report.subgoal.figures_on(),
             report.subgoal.valid_metric * 1000.0,
             report.samples.subgoals,
             report.subgoal.best_epoch,
@@ -174,7 +165,7 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
         );
         outln!(
             "  dynamics policy: {} mean error {:.3} deg ({} samples, best epoch {}/{})",
-            on(&report.dynamics),
+            report.dynamics.figures_on(),
             report.dynamics.valid_metric,
             report.dynamics.train_samples + report.dynamics.valid_samples,
             report.dynamics.best_epoch,

@@ -3,7 +3,7 @@
 //! report saved as `metrics.json`.
 
 use crate::relabel::{ExpertCoach, Recorded};
-use crate::training::{Metrics, Network, NetworkMetrics, Progress, TrainError, train};
+use crate::training::{Metrics, Network, NetworkMetrics, Progress, TrainError, figures_on, train};
 use crate::{RoundMetrics, Trained};
 use packwright_nets::TrainConfig;
 use packwright_pipeline::PipelineError;
@@ -90,7 +90,6 @@ pub enum Weakness {
 
 impl std::fmt::Display for Weakness {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let on = |held_out: bool| if held_out { "held-out" } else { "training" };
         match self {
             Weakness::Reasoner {
                 held_out,
@@ -100,7 +99,7 @@ impl std::fmt::Display for Weakness {
             } => write!(
                 f,
                 "{} reasoner accuracy {accuracy:.3} is below {MIN_REASONER_ACCURACY} (weakest: {weakest} decisions, {weakest_accuracy:.3}); teach more demonstrations of that stage",
-                on(*held_out)
+                figures_on(*held_out)
             ),
             Weakness::SubGoal {
                 held_out,
@@ -110,7 +109,7 @@ impl std::fmt::Display for Weakness {
             } => write!(
                 f,
                 "{} sub-goal error {:.1} mm is above {:.0} mm (weakest: {weakest} sub-goal, {:.1} mm)",
-                on(*held_out),
+                figures_on(*held_out),
                 error_m * 1000.0,
                 MAX_SUBGOAL_ERROR * 1000.0,
                 weakest_error_m * 1000.0
@@ -151,7 +150,7 @@ pub fn weaknesses(metrics: &[(Network, &NetworkMetrics)], dagger_rounds: usize) 
                 .map(|(k, v)| (k.clone(), *v))
                 .unwrap_or_default()
         };
-        if m.valid_samples == 0 {
+        if !m.held_out() {
             out.push(Weakness::NoneHeldOut {
                 network: network.to_string(),
                 samples: m.train_samples,
@@ -161,7 +160,7 @@ pub fn weaknesses(metrics: &[(Network, &NetworkMetrics)], dagger_rounds: usize) 
             Network::Reasoner if m.valid_metric < MIN_REASONER_ACCURACY => {
                 let (weakest, weakest_accuracy) = worst(true);
                 out.push(Weakness::Reasoner {
-                    held_out: m.valid_samples > 0,
+                    held_out: m.held_out(),
                     accuracy: m.valid_metric,
                     weakest,
                     weakest_accuracy,
@@ -170,7 +169,7 @@ pub fn weaknesses(metrics: &[(Network, &NetworkMetrics)], dagger_rounds: usize) 
             Network::SubGoal if m.valid_metric > MAX_SUBGOAL_ERROR => {
                 let (weakest, weakest_error_m) = worst(false);
                 out.push(Weakness::SubGoal {
-                    held_out: m.valid_samples > 0,
+                    held_out: m.held_out(),
                     error_m: m.valid_metric,
                     weakest,
                     weakest_error_m,

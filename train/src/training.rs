@@ -77,6 +77,25 @@ pub struct NetworkMetrics {
     pub seconds: f64,
 }
 
+impl NetworkMetrics {
+    /// Whether its figures are on held-out samples (false: too few were
+    /// held out, [`MIN_HELD_OUT`], and they are on the training samples).
+    pub fn held_out(&self) -> bool {
+        self.valid_samples > 0
+    }
+
+    /// What its figures are on, for people: "held-out" or "training".
+    pub fn figures_on(&self) -> &'static str {
+        figures_on(self.held_out())
+    }
+}
+
+/// "held-out" or "training": what a figure measured on held-out samples,
+/// or on the training samples, is called.
+pub fn figures_on(held_out: bool) -> &'static str {
+    if held_out { "held-out" } else { "training" }
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Metrics {
     pub reasoner: NetworkMetrics,
@@ -385,10 +404,10 @@ pub(crate) static SEEDED_DEVICE: std::sync::Mutex<()> = std::sync::Mutex::new(()
 /// the training samples where too few were held out
 /// ([`MIN_HELD_OUT`]).
 fn measured_on(m: &NetworkMetrics, what: &str) -> String {
-    if m.valid_samples == 0 {
-        format!("{what}, on the training samples (too few to hold some out)")
-    } else {
+    if m.held_out() {
         format!("held-out {what}")
+    } else {
+        format!("{what}, on the training samples (too few to hold some out)")
     }
 }
 
