@@ -222,18 +222,18 @@ impl<W: World> Scripted<'_, W> {
                     .route_solved(how, k + 1, start, solved, yaw, load)
             });
             // The expert's last resort: where the straight motion and both
-            // swings collide (a wrist over a deep box's wall), RRT-Connect's
-            // search, seeded by the sub-goal so that runs stay
-            // reproducible; a package, or a demonstration's replay, is not
-            // ended for a motion a search finds. If that fails too, the
+            // swings collide for every solution (a wrist over a deep box's
+            // wall), RRT-Connect's search to the sub-goal (the checks just
+            // failed are not repeated), seeded by the sub-goal so that runs
+            // stay reproducible; a package, or a demonstration's replay, is
+            // not ended for a motion a search finds. If that fails too, the
             // straight motion's collision is the reason.
             let routed = match (how, routed, target) {
-                (Connect::Straight, Err(why @ Failure::WouldCollide { .. }), Some(target)) => {
-                    let search = Connect::Rrt { seed: k as u64 };
-                    self.station
-                        .route_any(search, k + 1, start, target, yaw, load)
-                        .map_err(|_| why)
-                }
+                (Connect::Straight, Err(why @ Failure::WouldCollide { .. }), Some(target)) => self
+                    .station
+                    .search(k as u64, k + 1, start, target, load)
+                    .map(|route| (target, route))
+                    .map_err(|_| why),
                 (_, routed, _) => routed,
             };
             let elapsed = self.station.spend(k + 1, started)?;

@@ -531,23 +531,34 @@ impl<'a, W: World> Station<'a, W> {
         }
         match how {
             Connect::Straight => Err(straight),
-            Connect::Rrt { seed } => {
-                let query = Query {
-                    checker: &self.checker,
-                    limits: &self.arm.limits,
-                    held: load.held,
-                    ignore: load.ignore,
-                };
-                let config = RrtConfig {
-                    seed,
-                    deadline: self.deadline,
-                    ..RrtConfig::default()
-                };
-                let path =
-                    rrt::search(&query, from, to, &config).ok_or(Failure::NoPath { subgoal: k })?;
-                self.checked(k, from, path.get(1..).unwrap_or(&[]), load)
-            }
+            Connect::Rrt { seed } => self.search(seed, k, from, to, load),
         }
+    }
+
+    /// RRT-Connect's search from `from` to `to` (seeded by `seed`, within
+    /// the planning deadline), its path checked as the commands that will
+    /// be sent; [`Failure::NoPath`] if it finds none.
+    pub fn search(
+        &self,
+        seed: u64,
+        k: usize,
+        from: Joints,
+        to: Joints,
+        load: Load,
+    ) -> Result<Route, Failure> {
+        let query = Query {
+            checker: &self.checker,
+            limits: &self.arm.limits,
+            held: load.held,
+            ignore: load.ignore,
+        };
+        let config = RrtConfig {
+            seed,
+            deadline: self.deadline,
+            ..RrtConfig::default()
+        };
+        let path = rrt::search(&query, from, to, &config).ok_or(Failure::NoPath { subgoal: k })?;
+        self.checked(k, from, path.get(1..).unwrap_or(&[]), load)
     }
 
     /// The checked commands from `from` to a solved sub-goal: the
