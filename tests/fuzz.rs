@@ -1,9 +1,11 @@
-//! In-process fuzzing of the parser, the compiler and the artifact reader
-//! (issue 14): seeded mutations of every `.pack` file in `orders/` and
-//! `tests/cases/` go through `parse`, `format` (idempotent on its own
-//! output), `check` and `compile`; a share of those that compile have one
-//! artifact file mutated and read back by `CompiledDir::read` and
-//! `graphs()`. Every input must end in a result or an error, never a panic,
+//! In-process fuzzing of the parser, the compiler, `draw` and the artifact
+//! reader (issue 14): seeded mutations of every `.pack` file in `orders/`
+//! and `tests/cases/` go through `parse`, `format` (idempotent on its own
+//! output), `check` and `compile`; every one that resolves has each of its
+//! cells, inventories and orders drawn as `packwright draw` draws them
+//! (diagnostics and all: `draw` shows invalid geometry rather than refuse
+//! it); a share of those that compile have one artifact file mutated and
+//! read back by `CompiledDir::read` and `graphs()`. Every input must end in a result or an error, never a panic,
 //! within a time bound. A failing input is written to
 //! `target/fuzz-failures/` with its seed.
 //!
@@ -22,7 +24,8 @@
 #[allow(dead_code)] // only `root` is used here
 mod common;
 
-use packwright_compiler::{Anywhere, MemoryLoader};
+use packwright::commands::draw::{Subject, picture_of};
+use packwright_compiler::{Anywhere, MemoryLoader, load, resolve, validate};
 use packwright_pipeline::artifacts::CompiledDir;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -322,6 +325,7 @@ fn damage(rng: &mut ChaCha8Rng, bytes: &[u8]) -> Vec<u8> {
 #[derive(Default, Clone, Copy)]
 struct Tally {
     inputs: u64,
+    drawn: u64,
     compiled: u64,
     read_back: u64,
 }
@@ -362,6 +366,30 @@ fn watchdog(seed: u64, in_flight: &InFlight, done: &AtomicBool) {
             }
         }
     }
+}
+
+/// Draws every cell, inventory and order of `roots` as `packwright draw`
+/// does, if they resolve; the number of pictures asked for (each one an
+/// SVG or a `DrawError`, never a panic or a hang).
+fn draw_all(loader: &MemoryLoader, roots: &[PathBuf]) -> u64 {
+    let loaded = load::load(loader, roots);
+    if !loaded.errors.is_empty() {
+        return 0;
+    }
+    let (model, errors) = resolve::resolve(loader, &loaded.sources, &loaded.files);
+    if !errors.is_empty() {
+        return 0;
+    }
+    let diagnostics = validate::validate(&model);
+    let subjects: Vec<Subject> = (0..model.cells.len())
+        .map(Subject::Cell)
+        .chain((0..model.inventories.len()).map(Subject::Inventory))
+        .chain((0..model.orders.len()).map(|o| Subject::order(&model, o)))
+        .collect();
+    for subject in &subjects {
+        let _ = packwright_draw::picture(&picture_of(&model, subject, &diagnostics));
+    }
+    subjects.len() as u64
 }
 
 /// Runs input number `i` of the stream seeded `seed` as worker `worker`;
@@ -406,6 +434,7 @@ fn one(
             .fold(MemoryLoader::new(), |l, (p, t)| l.with(p, t.clone()))
             .with(path, input.clone());
         let roots = [path.clone()];
+        tally.drawn = draw_all(&loader, &roots);
         let Ok((_, artifacts)) = packwright_compiler::compile(&loader, &roots, &Anywhere) else {
             if let Err(failed) = packwright_compiler::check(&loader, &roots, &Anywhere) {
                 let _ = failed.render();
@@ -488,6 +517,7 @@ fn work(
                 match one(corpus, seed, i, &scratch, (t as usize, in_flight)) {
                     Ok(x) => {
                         total.inputs += x.inputs;
+                        total.drawn += x.drawn;
                         total.compiled += x.compiled;
                         total.read_back += x.read_back;
                     }
@@ -500,6 +530,7 @@ fn work(
         .collect();
     tallies.iter().fold(Tally::default(), |a, b| Tally {
         inputs: a.inputs + b.inputs,
+        drawn: a.drawn + b.drawn,
         compiled: a.compiled + b.compiled,
         read_back: a.read_back + b.read_back,
     })
@@ -508,8 +539,9 @@ fn work(
 fn report(t: Tally, started: Instant) {
     let s = started.elapsed().as_secs_f64();
     eprintln!(
-        "fuzz: {} inputs, {} compiled, {} artifact sets damaged and read back; {s:.1} s, {:.0} inputs/s",
+        "fuzz: {} inputs, {} pictures drawn, {} compiled, {} artifact sets damaged and read back; {s:.1} s, {:.0} inputs/s",
         t.inputs,
+        t.drawn,
         t.compiled,
         t.read_back,
         t.inputs as f64 / s
@@ -522,8 +554,10 @@ fn fuzz_short() {
     let t = fuzz(5_000, 1);
     report(t, started);
     assert_eq!(t.inputs, 5_000);
-    // The mutations leave some inputs valid, so the reader is exercised.
+    // The mutations leave some inputs valid, so the reader and `draw` are
+    // exercised.
     assert!(t.compiled > 0 && t.read_back > 0, "compiled {}", t.compiled);
+    assert!(t.drawn > t.compiled, "drawn {}", t.drawn);
 }
 
 #[test]

@@ -21,8 +21,10 @@ use packwright_pipeline::episode::scene_of;
 use packwright_pipeline::reach::RobotWorkspace;
 use packwright_recording::Cycle;
 
-/// What the command line asked to draw.
-enum Subject {
+/// What a picture shows: a cell (by its index in the model), an
+/// inventory's products in their cell, or a setup (an order's or a
+/// scenario's products, with the assignment).
+pub enum Subject {
     Cell(usize),
     Inventory(usize),
     Setup {
@@ -30,6 +32,26 @@ enum Subject {
         order: Option<usize>,
         setup: Setup,
     },
+}
+
+impl Subject {
+    /// Order `o` of `model` as written: every product at its inventory
+    /// position, none packed by a worker or missing.
+    pub fn order(model: &Model, o: usize) -> Subject {
+        let order = &model.orders[o];
+        let inv = &model.inventories[order.inventory];
+        Subject::Setup {
+            title: format!("order {}", order.name),
+            order: Some(o),
+            setup: Setup {
+                inventory: order.inventory,
+                assignment: order.assignment.iter().map(|a| (a.entry, a.slot)).collect(),
+                human_packed: Vec::new(),
+                missing: Vec::new(),
+                positions: inv.entries.iter().map(|e| e.at).collect(),
+            },
+        }
+    }
 }
 
 pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
@@ -83,19 +105,7 @@ pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
             name,
             ("order", "orders"),
         )?;
-        let order = &model.orders[o];
-        let inv = &model.inventories[order.inventory];
-        Subject::Setup {
-            title: format!("order {name}"),
-            order: Some(o),
-            setup: Setup {
-                inventory: order.inventory,
-                assignment: order.assignment.iter().map(|a| (a.entry, a.slot)).collect(),
-                human_packed: Vec::new(),
-                missing: Vec::new(),
-                positions: inv.entries.iter().map(|e| e.at).collect(),
-            },
-        }
+        Subject::order(&model, o)
     } else if let Some(name) = &args.inventory {
         let i = index_of(
             model.inventories.iter().map(|i| &i.name),
@@ -184,8 +194,9 @@ fn refuse(sources: packwright_compiler::SourceMap, errors: Vec<Error>) -> Exit {
     super::report_failure(&failed(sources, errors), false)
 }
 
-/// The picture of `subject`, with the diagnostics that belong to it.
-fn picture_of(model: &Model, subject: &Subject, diagnostics: &[Error]) -> Picture {
+/// The picture of `subject`, with the diagnostics that belong to it
+/// (`model` resolved: its indices hold; geometry need not be valid).
+pub fn picture_of(model: &Model, subject: &Subject, diagnostics: &[Error]) -> Picture {
     let (cell, inventory, order, setup, title) = match subject {
         Subject::Cell(c) => (*c, None, None, None, String::new()),
         Subject::Inventory(i) => (
