@@ -24,6 +24,10 @@
 #               family), wide (wide_SEED: deep boxes, tall products,
 #               short lifts) or compact (compact_SEED: the products
 #               beside the box); `packwright generate --help`
+#   GENERATE_ARGS  more arguments for `packwright generate`: "--hand K"
+#               teaches each cell by K hand-written demonstrations instead
+#               of its `demos` block, "--reversed-stock" draws every suite
+#               from a second inventory with the places reversed
 
 set -euo pipefail
 
@@ -43,6 +47,7 @@ else
 fi
 read -ra train_args <<<"${TRAIN_ARGS:-}"
 read -ra eval_args <<<"${EVAL_ARGS---baselines}"
+read -ra generate_args <<<"${GENERATE_ARGS:-}"
 work=${WORK:-$(mktemp -d "${TMPDIR:-/tmp}/packwright-family.XXXXXX")}
 mkdir -p "$work"
 family=${FAMILY:-standard}
@@ -57,7 +62,8 @@ for seed in "${seeds[@]}"; do
   cell=${prefix}_$seed
   pack=$work/$cell.pack
   echo "== $cell" >&2
-  "$bin" generate --family "$family" --seed "$seed" -o "$work" >/dev/null
+  "$bin" generate --family "$family" --seed "$seed" -o "$work" \
+    ${generate_args[@]+"${generate_args[@]}"} >/dev/null
   "$bin" compile "$pack" -o "$work/$cell.out" >&2
   # Exit 1: some demonstration could not be replayed; the model is written.
   rc=0

@@ -489,6 +489,17 @@ pub struct GenerateArgs {
     /// the standard ones hide.
     #[arg(long, value_enum, value_name = "FAMILY", default_value_t = CellFamily::Standard)]
     pub family: CellFamily,
+    /// Teach each cell as a line engineer would, with K hand-written
+    /// `order` + `demo` pairs (2 or 3 products each, in the taught slots,
+    /// demonstrated once in the cell's rule) instead of the generated
+    /// `demos` block. The cell and its suites stay the seed's.
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u8).range(1..=20))]
+    pub hand: Option<u8>,
+    /// Add a second inventory of the same products with their places
+    /// reversed, and draw every suite from it: products waiting where no
+    /// demonstration picked them.
+    #[arg(long)]
+    pub reversed_stock: bool,
 }
 
 /// The cells `generate` draws (`--family`).

@@ -92,7 +92,7 @@ fn every_file_has_the_expected_blocks() {
             "\n  pending (".to_owned(),
             "\n  box carton (".to_owned(),
             format!("\ninventory {} for gen_{seed} {{\n", g.inventory),
-            format!("\ndemos {} for {} {{\n", g.demos, g.inventory),
+            format!("\ndemos {} for {} {{\n", g.demos[0], g.inventory),
             format!(
                 "\n  choose {} of {} into {}\n  keep 0.5\n  jitter 10 mm\n  sequence {}\n",
                 g.taught_n,

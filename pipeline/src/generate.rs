@@ -21,6 +21,11 @@
 //! the products' side and place, so adding the families changed no
 //! standard cell.
 //!
+//! A [`Variant`] teaches the same cell as a line engineer does, with a
+//! few hand-written `order` + `demo` pairs instead of the `demos` block,
+//! and may draw every suite from a second inventory with the products'
+//! places reversed; the cell and its suites stay the seed's.
+//!
 //! Pure and deterministic: every draw comes from one
 //! `ChaCha8Rng::seed_from_u64(seed)`, so the same seed gives the same bytes
 //! everywhere. Geometry is drawn on a millimetre grid and checked here
@@ -217,6 +222,39 @@ impl Side {
 /// the seed did not draw itself ([`family_cell_taught`]).
 const LISTED_STREAM: u64 = 0x6c69_7374_6564;
 
+/// Seeds the hand-written demonstrations' draws ([`Variant::hand`]), so
+/// that the rest of the cell stays the seed's.
+const HAND_STREAM: u64 = 0x6861_6e64;
+
+/// How a generated cell is taught and where its suites' products wait;
+/// the default is the recipe's: one sparse `demos` block, one inventory.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+pub struct Variant {
+    /// Taught by this many hand-written `order` + `demo` pairs instead of
+    /// the `demos` block, as a line engineer teaches: each order 2 or 3
+    /// products in the taught slots, demonstrated once in the cell's rule
+    /// (one product sometimes seen up to the jitter off its place).
+    pub hand: Option<usize>,
+    /// A second inventory of the same products with their places reversed
+    /// (the first where the last waits), which every suite draws from: the
+    /// products wait where no demonstration picked them.
+    pub reversed_stock: bool,
+}
+
+impl Variant {
+    /// The `generate` options that ask for it, each with a leading space.
+    fn options(self) -> String {
+        let mut o = String::new();
+        if let Some(k) = self.hand {
+            let _ = write!(o, " --hand {k}");
+        }
+        if self.reversed_stock {
+            o.push_str(" --reversed-stock");
+        }
+        o
+    }
+}
+
 /// The taught sequence rule (`sequence` of the `demos` block).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -235,6 +273,15 @@ impl Sequence {
             Sequence::Ascending => "ascending",
             Sequence::Descending => "descending",
             Sequence::Listed => "listed",
+        }
+    }
+
+    /// "packed in … order".
+    fn phrase(self) -> &'static str {
+        match self {
+            Sequence::Ascending => "product",
+            Sequence::Descending => "reverse product",
+            Sequence::Listed => "the listed",
         }
     }
 }
@@ -306,9 +353,15 @@ pub struct Generated {
     pub name: String,
     /// The whole file, formatted canonically.
     pub text: String,
+    /// The inventory the teaching draws from.
     pub inventory: String,
-    /// The `demos` block.
-    pub demos: String,
+    /// The inventory every suite draws from: [`Generated::inventory`], or
+    /// the reversed one ([`Variant::reversed_stock`]).
+    pub suite_inventory: String,
+    /// The `demos` block, or the hand-written `demo` blocks
+    /// ([`Variant::hand`]).
+    pub demos: Vec<String>,
+    pub variant: Variant,
     /// N of the demonstrations (2 or 3).
     pub taught_n: usize,
     pub sequence: Sequence,
@@ -319,13 +372,14 @@ pub struct Generated {
     pub products: Vec<String>,
     /// Slots in declaration order (label i + 1).
     pub slots: Vec<String>,
-    /// The slots of the `demos` block, in declaration order.
+    /// The slots the teaching may use, in declaration order (hand-written
+    /// orders use some of them).
     pub taught_slots: Vec<String>,
     /// The slots no demonstration uses (one or two).
     pub untaught_slots: Vec<String>,
-    /// `repeat` of the `demos` block (1 or 2).
+    /// `repeat` of the `demos` block (1 or 2; 1 when taught by hand).
     pub repeat: usize,
-    /// How many demonstrations the `demos` block expands to.
+    /// How many demonstrations the teaching expands to.
     pub demonstrations: usize,
     pub box_side: Side,
     pub pending_side: Side,
@@ -697,6 +751,153 @@ fn layout_is_valid(l: &Layout, base: [i64; 2], products: &[Product], product_rea
     true
 }
 
+/// One hand-written order and its one demonstration ([`Variant::hand`]).
+struct HandOrder {
+    /// 1, 2, …: the blocks are `NAME_order<number>` and `NAME_seen<number>`.
+    number: usize,
+    /// (product, slot) in the order's lines.
+    lines: Vec<(String, String)>,
+    /// The products in the order the demonstrator packed them.
+    sequence: Vec<String>,
+    /// A product seen off its place: its name and where it stood, mm.
+    seen_at: Option<(String, [i64; 2])>,
+}
+
+/// `k` hand-written orders of 2 or 3 products in `taught_slots`, each
+/// demonstrated once in `rule` (a listed rule's priority, else inventory
+/// order, reversed when descending), from their own random stream.
+fn hand_taught(
+    seed: u64,
+    k: usize,
+    products: &[String],
+    positions: &[[i64; 2]],
+    taught_slots: &[String],
+    (rule, priority): (Sequence, &[String]),
+) -> Vec<HandOrder> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ HAND_STREAM);
+    let rank = |p: &String| priority.iter().position(|q| q == p).unwrap_or(0);
+    (1..=k)
+        .map(|number| {
+            let size = rng
+                .random_range(2..=3)
+                .min(products.len())
+                .min(taught_slots.len());
+            let chosen = index::sample(&mut rng, products.len(), size).into_vec();
+            let slots = index::sample(&mut rng, taught_slots.len(), size).into_vec();
+            let lines: Vec<(String, String)> = chosen
+                .iter()
+                .zip(&slots)
+                .map(|(&p, &s)| (products[p].clone(), taught_slots[s].clone()))
+                .collect();
+            let mut sequence: Vec<String> = lines.iter().map(|(p, _)| p.clone()).collect();
+            sequence.sort_by_key(rank);
+            if rule == Sequence::Descending {
+                sequence.reverse();
+            }
+            let seen_at = rng.random_bool(0.5).then(|| {
+                let p = chosen[rng.random_range(0..chosen.len())];
+                let [x, y] = positions[p];
+                let dx = rng.random_range(-JITTER_MM..=JITTER_MM);
+                let dy = rng.random_range(-JITTER_MM..=JITTER_MM);
+                (products[p].clone(), [x + dx, y + dy])
+            });
+            HandOrder {
+                number,
+                lines,
+                sequence,
+                seen_at,
+            }
+        })
+        .collect()
+}
+
+/// The `order` and `demo` blocks of [`hand_taught`] orders.
+fn write_hand_taught(
+    t: &mut String,
+    name: &str,
+    inventory: &str,
+    orders: &[HandOrder],
+    rule: Sequence,
+) {
+    let _ = writeln!(
+        t,
+        "# Taught by hand: {} order{}, each demonstrated once, packed in {} order.",
+        orders.len(),
+        if orders.len() == 1 { "" } else { "s" },
+        rule.phrase()
+    );
+    for (i, o) in orders.iter().enumerate() {
+        if i > 0 {
+            t.push('\n');
+        }
+        let order = format!("{name}_order{}", o.number);
+        let _ = writeln!(t, "order {order} for {inventory} {{");
+        for (p, slot) in &o.lines {
+            let _ = writeln!(t, "  {p} -> {slot}");
+        }
+        let _ = writeln!(t, "}}");
+        t.push('\n');
+        let _ = writeln!(t, "demo {name}_seen{} for {order} {{", o.number);
+        let _ = writeln!(t, "  sequence {}", o.sequence.join(", "));
+        if let Some((p, at)) = &o.seen_at {
+            let _ = writeln!(t, "  at {p} {}", point(*at));
+        }
+        let _ = writeln!(t, "}}");
+    }
+}
+
+/// What the recipe's `demos` block says.
+struct SparseTeaching<'a> {
+    demos: &'a str,
+    inventory: &'a str,
+    n: usize,
+    m: usize,
+    demonstrations: usize,
+    priority: &'a [String],
+    taught_slots: &'a [String],
+    untaught_slots: &'a [String],
+    sequence: Sequence,
+    repeat: usize,
+    seed: u64,
+}
+
+/// The recipe's sparse `demos` block, with its comment.
+fn write_sparse_teaching(t: &mut String, d: SparseTeaching) {
+    let _ = writeln!(
+        t,
+        "# Sparse teaching: {} of {} products, half of the combinations, {} never used;",
+        d.n,
+        d.m,
+        if d.untaught_slots.len() == 1 {
+            format!("slot {}", d.untaught_slots[0])
+        } else {
+            format!("slots {}", d.untaught_slots.join(" and "))
+        }
+    );
+    let _ = writeln!(
+        t,
+        "# {} demonstrations, packed in {} order.",
+        d.demonstrations,
+        d.sequence.phrase()
+    );
+    let _ = writeln!(t, "demos {} for {} {{", d.demos, d.inventory);
+    let _ = writeln!(
+        t,
+        "  choose {} of {} into {}",
+        d.n,
+        d.priority.join(", "),
+        d.taught_slots.join(", ")
+    );
+    let _ = writeln!(t, "  keep {KEEP}");
+    let _ = writeln!(t, "  jitter {JITTER_MM} mm");
+    let _ = writeln!(t, "  sequence {}", d.sequence.as_str());
+    if d.repeat > 1 {
+        let _ = writeln!(t, "  repeat {}", d.repeat);
+    }
+    let _ = writeln!(t, "  seed {}", d.seed);
+    let _ = writeln!(t, "}}");
+}
+
 /// The standard cell generated from `seed`: see the module documentation.
 pub fn family_cell(seed: u64) -> Generated {
     family_cell_taught(seed, None)
@@ -714,6 +915,17 @@ pub fn family_cell_taught(seed: u64, rule: Option<Sequence>) -> Generated {
 /// model together must agree on the rule (`train` infers one rule from all
 /// its demonstrations).
 pub fn generated_cell(family: Family, seed: u64, rule: Option<Sequence>) -> Generated {
+    generated_variant(family, seed, rule, Variant::default())
+}
+
+/// [`generated_cell`] taught and stocked as `variant` says; the cell, its
+/// products and its suites' draws are the seed's whatever the variant.
+pub fn generated_variant(
+    family: Family,
+    seed: u64,
+    rule: Option<Sequence>,
+    variant: Variant,
+) -> Generated {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let name = family_cell_name(family, seed);
     let ranges = family.ranges();
@@ -875,9 +1087,37 @@ pub fn generated_cell(family: Family, seed: u64, rule: Option<Sequence>) -> Gene
         })
         .filter(|&s| s < 100);
 
-    let demonstrations = demonstrations(m, taught_slots.len(), n) as usize * repeat;
     let inventory = format!("{name}_stock");
-    let demos = format!("{name}_teach");
+    let suite_inventory = if variant.reversed_stock {
+        format!("{name}_stock2")
+    } else {
+        inventory.clone()
+    };
+    let hand = variant.hand.map(|k| {
+        hand_taught(
+            seed,
+            k,
+            &product_names,
+            &layout.positions,
+            &taught_slots,
+            (sequence, &priority),
+        )
+    });
+    let (demos, demonstrations, repeat) = match &hand {
+        Some(orders) => (
+            orders
+                .iter()
+                .map(|o| format!("{name}_seen{}", o.number))
+                .collect(),
+            orders.len(),
+            1,
+        ),
+        None => (
+            vec![format!("{name}_teach")],
+            demonstrations(m, taught_slots.len(), n) as usize * repeat,
+            repeat,
+        ),
+    };
 
     // The text, in canonical layout.
     let mut t = String::new();
@@ -888,8 +1128,9 @@ pub fn generated_cell(family: Family, seed: u64, rule: Option<Sequence>) -> Gene
     };
     let _ = writeln!(
         t,
-        "# {name}: a random cell from `packwright generate{} --seed {seed}`;",
-        family.option()
+        "# {name}: a random cell from `packwright generate{}{} --seed {seed}`;",
+        family.option(),
+        variant.options()
     );
     let _ = writeln!(t, "# regenerate it rather than edit it.");
     let _ = writeln!(t, "# The box stands {}.", box_side.phrase());
@@ -950,39 +1191,37 @@ pub fn generated_cell(family: Family, seed: u64, rule: Option<Sequence>) -> Gene
     }
     let _ = writeln!(t, "}}");
     t.push('\n');
-    let _ = writeln!(
-        t,
-        "# Sparse teaching: {n} of {m} products, half of the combinations, {} never used;",
-        if untaught_slots.len() == 1 {
-            format!("slot {}", untaught_slots[0])
-        } else {
-            format!("slots {}", untaught_slots.join(" and "))
+    if variant.reversed_stock {
+        let _ = writeln!(
+            t,
+            "# The same products with their places reversed: every suite draws from here."
+        );
+        let _ = writeln!(t, "inventory {suite_inventory} for {name} {{");
+        for (p, at) in products.iter().zip(layout.positions.iter().rev()) {
+            let _ = writeln!(t, "  {} {}", p.name, point(*at));
         }
-    );
-    let _ = writeln!(
-        t,
-        "# {demonstrations} demonstrations, packed in {} order.",
-        match sequence {
-            Sequence::Ascending => "product",
-            Sequence::Descending => "reverse product",
-            Sequence::Listed => "the listed",
-        }
-    );
-    let _ = writeln!(t, "demos {demos} for {inventory} {{");
-    let _ = writeln!(
-        t,
-        "  choose {n} of {} into {}",
-        priority.join(", "),
-        taught_slots.join(", ")
-    );
-    let _ = writeln!(t, "  keep {KEEP}");
-    let _ = writeln!(t, "  jitter {JITTER_MM} mm");
-    let _ = writeln!(t, "  sequence {}", sequence.as_str());
-    if repeat > 1 {
-        let _ = writeln!(t, "  repeat {repeat}");
+        let _ = writeln!(t, "}}");
+        t.push('\n');
     }
-    let _ = writeln!(t, "  seed {demos_seed}");
-    let _ = writeln!(t, "}}");
+    match &hand {
+        Some(orders) => write_hand_taught(&mut t, &name, &inventory, orders, sequence),
+        None => write_sparse_teaching(
+            &mut t,
+            SparseTeaching {
+                demos: &demos[0],
+                inventory: &inventory,
+                n,
+                m,
+                demonstrations,
+                priority: &priority,
+                taught_slots: &taught_slots,
+                untaught_slots: &untaught_slots,
+                sequence,
+                repeat,
+                seed: demos_seed,
+            },
+        ),
+    }
     for s in &suites {
         t.push('\n');
         let about = match s.kind {
@@ -1003,7 +1242,7 @@ pub fn generated_cell(family: Family, seed: u64, rule: Option<Sequence>) -> Gene
             }
         };
         let _ = writeln!(t, "{about}");
-        let _ = writeln!(t, "scenarios {} for {inventory} {{", s.name);
+        let _ = writeln!(t, "scenarios {} for {suite_inventory} {{", s.name);
         let _ = writeln!(
             t,
             "  choose {} of {} into {}",
@@ -1032,7 +1271,9 @@ pub fn generated_cell(family: Family, seed: u64, rule: Option<Sequence>) -> Gene
         name,
         text: t,
         inventory,
+        suite_inventory,
         demos,
+        variant,
         taught_n: n,
         sequence,
         priority,
@@ -1132,6 +1373,65 @@ mod tests {
                     &crate::reach::RobotWorkspace::new(),
                 );
                 assert!(checked.is_ok(), "seed {seed}, {rule:?}");
+            }
+        }
+    }
+
+    /// A cell taught by hand and stocked reversed is the seed's cell, with
+    /// the seed's suites drawn from the reversed inventory, and its few
+    /// demonstrations show the rule asked for.
+    #[test]
+    fn a_hand_taught_cell_is_the_seeds_cell_taught_by_hand() {
+        use crate::teach::cell_rule;
+        use packwright_interface::SequenceRule;
+        let variant = Variant {
+            hand: Some(3),
+            reversed_stock: true,
+        };
+        for seed in 0..8 {
+            for (rule, expected) in [
+                (Sequence::Ascending, SequenceRule::Ascending),
+                (Sequence::Descending, SequenceRule::Descending),
+            ] {
+                let own = family_cell_taught(seed, Some(rule));
+                let g = generated_variant(Family::Standard, seed, Some(rule), variant);
+                assert_eq!(
+                    g,
+                    generated_variant(Family::Standard, seed, Some(rule), variant)
+                );
+                assert_eq!(g.suites, own.suites, "seed {seed}");
+                assert_eq!((g.demonstrations, g.demos.len()), (3, 3), "seed {seed}");
+                // Below the header line, the cell, its products and its
+                // first inventory are the seed's.
+                let body = |text: &str| {
+                    let after_header = text.split_once('\n').map_or("", |(_, rest)| rest);
+                    after_header.split("\n\n#").next().map(str::to_owned)
+                };
+                assert_eq!(body(&g.text), body(&own.text), "seed {seed}");
+                assert!(g.text.contains(&format!(
+                    "\ninventory {} for {} {{\n",
+                    g.suite_inventory, g.name
+                )));
+                for suite in &g.suites {
+                    let line = format!("\nscenarios {} for {} {{\n", suite.name, g.suite_inventory);
+                    assert!(g.text.contains(&line), "seed {seed}: {line}");
+                }
+                assert_eq!(packwright_grammar::format(&g.text).unwrap(), g.text);
+                let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
+                let compiled = match check(
+                    &loader,
+                    &[PathBuf::from(g.file_name())],
+                    &crate::reach::RobotWorkspace::new(),
+                ) {
+                    Ok(c) => c,
+                    Err(failed) => panic!("seed {seed}:\n{}\n{}", failed.render(), g.text),
+                };
+                assert_eq!(compiled.demonstrations().expect("demonstrations").len(), 3);
+                let inferred = cell_rule(&compiled, &g.name)
+                    .expect("one rule")
+                    .expect("demonstrations");
+                assert_eq!(inferred.rule, expected, "seed {seed}");
+                assert!(inferred.exceptions.is_empty(), "seed {seed}");
             }
         }
     }

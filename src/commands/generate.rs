@@ -5,7 +5,7 @@ use crate::Exit;
 use crate::cli::{CellFamily, GenerateArgs, TaughtOrder};
 use crate::fsio::write_file_atomically;
 use anyhow::{Context, bail};
-use packwright_pipeline::generate::{Family, Sequence, generated_cell};
+use packwright_pipeline::generate::{Family, Sequence, Variant, generated_variant};
 use std::fs;
 
 pub fn run(args: &GenerateArgs) -> anyhow::Result<Exit> {
@@ -34,8 +34,12 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<Exit> {
         CellFamily::Wide => Family::Wide,
         CellFamily::Compact => Family::Compact,
     };
+    let variant = Variant {
+        hand: args.hand.map(usize::from),
+        reversed_stock: args.reversed_stock,
+    };
     for seed in args.seed..=last {
-        let generated = generated_cell(family, seed, rule);
+        let generated = generated_variant(family, seed, rule, variant);
         let path = args.output.join(generated.file_name());
         write_file_atomically(&path, generated.text.as_bytes())?;
         outln!("{}", path.display());
