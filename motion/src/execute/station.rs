@@ -9,7 +9,7 @@
 //! return.
 
 use crate::blend::{Blended, blend_straight};
-use crate::collision::{Checker, Held, MAX_STEP, ProductBody, Touch};
+use crate::collision::{Checker, Held, LeverArms, MAX_STEP, ProductBody, Touch, held_move};
 use crate::expert::{SubGoal, Suction};
 use crate::rrt::{self, Query, RrtConfig};
 use crate::smoothing::lower_bound;
@@ -971,13 +971,10 @@ pub fn checked_blend_by<'h>(
             .map_err(|e| Unchecked::Smoothing(e.to_string()))?;
         // A capped corner changes the samples from its transition on
         // only: those before it passed in the round before.
-        let mut checked = previous.as_ref().map_or(
-            Checked {
-                from: 0,
-                last: start,
-            },
-            |(before, checked)| resume_point(before, &motion, *checked, start),
-        );
+        let from_start = Checked::at(checker, 0, start, first.held);
+        let mut checked = previous.as_ref().map_or(from_start, |(before, checked)| {
+            resume_point(before, &motion, *checked, from_start)
+        });
         let Some((i, hit)) = first_collision(checker, &motion, &load_of, &mut checked) else {
             return Ok(motion);
         };
@@ -1077,10 +1074,34 @@ fn straight_shares(
 
 /// How far a check of a motion got: its samples before `from` passed,
 /// the last of them checked being `last` (the start when none was).
+/// How far a check of a motion's samples got: the first sample not yet
+/// checked, and the configuration checked last with the held product's
+/// lever arms there.
 #[derive(Debug, Clone, Copy)]
 struct Checked {
     from: usize,
     last: Joints,
+    levers: LeverArms,
+}
+
+impl Checked {
+    /// Checked up to sample `from`, last at `q`, where `held` (the next
+    /// sample's) hangs from the cup.
+    fn at(checker: &Checker, from: usize, q: Joints, held: Option<&Held>) -> Checked {
+        Checked {
+            from,
+            last: q,
+            levers: checker.lever_arms(&q, held),
+        }
+    }
+
+    /// Whether `q` is too far from the last checked configuration to
+    /// follow it unchecked: a joint a degree away, or the held product
+    /// moved [`Checker::held_step`].
+    fn far(&self, checker: &Checker, q: &Joints) -> bool {
+        span(q, &self.last) >= MAX_STEP
+            || held_move(&self.levers, &self.last, q) >= checker.held_step()
+    }
 }
 
 /// The largest joint difference between `a` and `b`.
@@ -1122,7 +1143,7 @@ fn first_collision<'h>(
         let changes = !last_one && motion.leg_at(i + 1) != leg;
         let far = samples
             .get(i + 1)
-            .is_none_or(|next| span(next, &done.last) >= MAX_STEP);
+            .is_none_or(|next| done.far(checker, next));
         if !(last_one || changes || far) {
             continue;
         }
@@ -1130,7 +1151,7 @@ fn first_collision<'h>(
         // The product a leg ignores is ignored on its straight segment
         // only: a transition's commands must keep the cup off it too.
         let ignore = if motion.shaped(i) { None } else { load.ignore };
-        let hit = if span(q, &done.last) >= MAX_STEP {
+        let hit = if done.far(checker, q) {
             checker.check_motion(&done.last, q, load.held, ignore)
         } else {
             checker.check(q, load.held, ignore)
@@ -1138,10 +1159,12 @@ fn first_collision<'h>(
         if let Some(hit) = hit {
             return Some((i, hit));
         }
-        *done = Checked {
-            from: i + 1,
-            last: *q,
+        let next_held = if changes {
+            load_of(motion.leg_at(i + 1)).held
+        } else {
+            load.held
         };
+        *done = Checked::at(checker, i + 1, *q, next_held);
     }
     None
 }
@@ -1149,18 +1172,11 @@ fn first_collision<'h>(
 /// Where a check of `motion` can resume after `before` (the motion of the
 /// round before, checked up to `checked`): the samples both have alike, with
 /// the same legs, passed already; from the start when they differ before.
-fn resume_point(before: &Blended, motion: &Blended, checked: Checked, start: Joints) -> Checked {
+fn resume_point(before: &Blended, motion: &Blended, checked: Checked, start: Checked) -> Checked {
     let alike = (0..checked.from).all(|i| {
         motion.samples.get(i) == before.samples.get(i) && motion.leg_at(i) == before.leg_at(i)
     });
-    if alike {
-        checked
-    } else {
-        Checked {
-            from: 0,
-            last: start,
-        }
-    }
+    if alike { checked } else { start }
 }
 
 /// Joints that put the cup tip at `tip` pointing down with `yaw`, free of
