@@ -13,7 +13,9 @@ use std::path::PathBuf;
     about = "Teach a UR10 cobot to pack customer orders from a few demonstrations",
     long_about = "Teach a UR10 cobot to pack customer orders from a few demonstrations.\n\n\
 Cells, products, inventories, orders, demonstrations and test scenarios are written in \
-`.pack` files. `check` finds every mistake in them; `compile` turns them into graph \
+`.pack` files. `check` finds their mistakes, every one of a kind at once: syntax first, \
+then names, then geometry, reach and counts (a later kind is looked for once the earlier \
+ones are fixed); `compile` turns them into graph \
 datasets and goal-label tables for training; `show` summarises compiled artifacts; \
 `fmt` lays files out canonically.",
     after_help = "Exit codes: 0 success; 1 diagnostics in the input (or `fmt --check` found \

@@ -8,6 +8,10 @@ use packwright_grammar::SyntaxError;
 use std::path::PathBuf;
 use thiserror::Error;
 
+/// The rules a `demos` block's `sequence` names: in a `demo`'s sequence,
+/// which lists products, one is a product unknown by that name.
+const SEQUENCE_RULES: [&str; 4] = ["ascending", "descending", "listed", "random"];
+
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum Error {
     #[error("cannot read `{}`: {reason}", path.display())]
@@ -457,6 +461,7 @@ impl Error {
             Error::RobotFileMissing { .. } => "the path is relative to the file that names it".into(),
             Error::RobotUnusable { .. } => "packwright drives one chain of six revolute joints from the root link to `tool0` (or `flange`); side branches bolted on by fixed joints are fine, collision meshes must be STL or OBJ files it can find".into(),
             Error::Duplicate { kind, .. } => format!("rename one of the two; every {kind} needs its own name"),
+            Error::Unknown { kind: "product", name, .. } if SEQUENCE_RULES.contains(&name.as_str()) => format!("a `demo` lists its products in the order they were packed (`sequence A, C, E`); `sequence {name}` belongs in a `demos` block"),
             Error::Unknown {
                 suggestion: Some(s), ..
             } => format!("did you mean `{s}`?"),

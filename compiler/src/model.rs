@@ -83,15 +83,19 @@ impl Rect {
     }
 
     /// How far `inner` sticks out of `self` (0 when inside), in metres.
+    /// An edge on `self`'s edge is inside, up to the rounding of decimal
+    /// coordinates (`0.80 + 0.05` is a hair over `0.85` in binary).
     pub fn excess(&self, inner: &Rect) -> f64 {
-        [
+        const EPS: f64 = 1e-9;
+        let excess = [
             self.min[0] - inner.min[0],
             self.min[1] - inner.min[1],
             inner.max[0] - self.max[0],
             inner.max[1] - self.max[1],
         ]
         .into_iter()
-        .fold(0.0, f64::max)
+        .fold(0.0, f64::max);
+        if excess <= EPS { 0.0 } else { excess }
     }
 
     /// True when the two share some area (touching edges do not count).

@@ -275,15 +275,20 @@ fn within_workspace(
     ok
 }
 
+/// How to write a length that must be above zero.
+const POSITIVE_LENGTH: &str = "write a positive length";
+
 impl Resolver<'_> {
-    fn positive(&mut self, value: f64, at: Loc, what: &str) -> bool {
+    /// Whether `value` is above zero; else an error saying that `what`
+    /// must be, and how to write it (`fix`).
+    fn positive(&mut self, value: f64, at: Loc, what: &str, fix: &str) -> bool {
         if value > 0.0 {
             return true;
         }
         self.errors.push(Error::BadGeometry {
             at,
             what: format!("{what} must be greater than zero"),
-            fix: "write a positive length".into(),
+            fix: fix.into(),
         });
         false
     }
@@ -521,7 +526,12 @@ impl Resolver<'_> {
                     };
                     let dims = [size.x.metres, size.y.metres, h.metres];
                     if dims.iter().any(|d| *d <= 0.0) {
-                        ok &= self.positive(0.0, Loc::new(f, size.span), "every box dimension");
+                        ok &= self.positive(
+                            0.0,
+                            Loc::new(f, size.span),
+                            "every box dimension",
+                            POSITIVE_LENGTH,
+                        );
                     }
                     boxes.push(BoxDef {
                         name: name.text.clone(),
@@ -649,11 +659,21 @@ impl Resolver<'_> {
             ast::Shape::Box(s) => s.span,
         };
         if size.iter().any(|d| *d <= 0.0) {
-            self.positive(0.0, Loc::new(f, shape_span), "every product dimension");
+            self.positive(
+                0.0,
+                Loc::new(f, shape_span),
+                "every product dimension",
+                POSITIVE_LENGTH,
+            );
             return;
         }
         if let Some(m) = &p.mass
-            && !self.positive(m.kg, Loc::new(f, m.span), "a mass")
+            && !self.positive(
+                m.kg,
+                Loc::new(f, m.span),
+                "a mass",
+                "write the mass in kilograms, above zero (`mass 0.3`)",
+            )
         {
             return;
         }
