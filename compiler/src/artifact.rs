@@ -81,6 +81,11 @@ pub struct DemoBlockRecord {
     /// when false, so other blocks' bytes are as before).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub any_order: bool,
+    /// A `demos` block with `sequence listed`: its `choose` list, the
+    /// priority its demonstrations follow (absent for other blocks, so
+    /// their bytes are as before).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub priority: Vec<String>,
 }
 
 /// A product and where it is, `[x, y, z]` in metres (z = centre height).

@@ -156,7 +156,7 @@ impl Lesson {
             .collect::<BTreeSet<_>>()
             .into_iter()
             .collect();
-        let blocks = chosen
+        let blocks: Vec<String> = chosen
             .iter()
             .map(|d| d.block.clone())
             .collect::<BTreeSet<_>>()
@@ -191,7 +191,15 @@ impl Lesson {
         } else {
             let shown: Vec<DemonstrationRecord> =
                 ordered.iter().map(|&k| chosen[k].clone()).collect();
-            let inferred = sequence_rule(&world, &shown)?;
+            // The priorities `sequence listed` blocks wrote, of the blocks
+            // taught.
+            let declared: Vec<Vec<String>> = manifest
+                .demo_blocks
+                .iter()
+                .filter(|b| !b.priority.is_empty() && blocks.contains(&b.name))
+                .map(|b| b.priority.clone())
+                .collect();
+            let inferred = sequence_rule(&world, &shown, &declared)?;
             Inferred {
                 exceptions: inferred.exceptions.iter().map(|&e| ordered[e]).collect(),
                 rule: inferred.rule,
@@ -459,7 +467,22 @@ pub fn cell_rule(compiled: &Compiled, cell: &str) -> Result<Option<Inferred>> {
     if demos.is_empty() {
         return Ok(None);
     }
-    sequence_rule(&emit::world_file(&compiled.model), &demos).map(Some)
+    let model = &compiled.model;
+    let declared: Vec<Vec<String>> = compiled
+        .expanded
+        .blocks
+        .iter()
+        .filter(|b| model.cells[model.inventories[b.inventory].cell].name == cell)
+        .filter(|b| !b.priority.is_empty())
+        .map(|b| {
+            let inventory = &model.inventories[b.inventory];
+            b.priority
+                .iter()
+                .map(|&e| model.products[inventory.entries[e].product].name.clone())
+                .collect()
+        })
+        .collect();
+    sequence_rule(&emit::world_file(model), &demos, &declared).map(Some)
 }
 
 /// Whether `sequence` (product names) follows `rule` in `inventory`
@@ -478,11 +501,17 @@ fn follows(rule: &SequenceRule, inventory: &[&str], sequence: &[String]) -> bool
 /// The sequence rule `demos` follow: ascending or descending inventory
 /// order, or a priority list of product names (the order the most
 /// demonstrations agree on pairwise; products never ordered against each
-/// other keep their first inventory's order). The rule that explains the
-/// most demonstrations wins (ascending, then descending, on a tie); it
+/// other keep the order a `declared` priority gives them, a `sequence
+/// listed` block's `choose` list, else their first inventory's). The rule
+/// that explains the most demonstrations wins (on a tie: the listed one
+/// when a priority was declared, else ascending, then descending); it
 /// must explain at least [`RULE_MAJORITY`] of them, else the
 /// demonstrations teach no rule and this is an error.
-pub fn sequence_rule(world: &WorldFile, demos: &[DemonstrationRecord]) -> Result<Inferred> {
+pub fn sequence_rule(
+    world: &WorldFile,
+    demos: &[DemonstrationRecord],
+    declared: &[Vec<String>],
+) -> Result<Inferred> {
     let mut inventories: Vec<Vec<&str>> = Vec::new();
     let mut names: Vec<&str> = Vec::new();
     let mut votes: BTreeMap<(&str, &str), usize> = BTreeMap::new();
@@ -513,6 +542,19 @@ pub fn sequence_rule(world: &WorldFile, demos: &[DemonstrationRecord]) -> Result
             }
         }
     }
+    // Declared priorities first: the order a tie below keeps.
+    let mut names: Vec<&str> = declared
+        .iter()
+        .flatten()
+        .map(String::as_str)
+        .chain(names)
+        .fold(Vec::new(), |mut out, n| {
+            if !out.contains(&n) {
+                out.push(n);
+            }
+            out
+        });
+    names.retain(|n| inventories.iter().any(|inv| inv.contains(n)));
     // The priority list: the majority's pairwise order, one product at a
     // time (the first not after any remaining one; in a cycle, the one
     // after the fewest).
@@ -528,11 +570,12 @@ pub fn sequence_rule(world: &WorldFile, demos: &[DemonstrationRecord]) -> Result
             .unwrap_or(0);
         list.push(left.remove(i).to_owned());
     }
-    let candidates = [
-        SequenceRule::Ascending,
-        SequenceRule::Descending,
-        SequenceRule::Listed(list),
-    ];
+    let listed = SequenceRule::Listed(list);
+    let candidates = if declared.is_empty() {
+        [SequenceRule::Ascending, SequenceRule::Descending, listed]
+    } else {
+        [listed, SequenceRule::Ascending, SequenceRule::Descending]
+    };
     let breaking = |rule: &SequenceRule| -> Vec<usize> {
         demos
             .iter()

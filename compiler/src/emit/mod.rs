@@ -313,6 +313,11 @@ fn manifest(sources: &SourceMap, m: &Model, ex: &Expanded, shape: Shape) -> Mani
             demonstrations: b.demos,
             samples: 2 * b.handled,
             any_order: b.any_order,
+            priority: b
+                .priority
+                .iter()
+                .map(|&e| name_of(m, b.inventory, e))
+                .collect(),
         })
         .collect();
     Manifest {

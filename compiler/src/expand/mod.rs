@@ -95,6 +95,11 @@ pub struct DemoBlock {
     /// A `demos` block with `sequence random`: its demonstrations show
     /// that any order is right, not an order to learn.
     pub any_order: bool,
+    /// A `demos` block with `sequence listed`: its `choose` list
+    /// (inventory entries), the priority its demonstrations follow, which
+    /// also orders the products no demonstration shows together; empty
+    /// for every other block.
+    pub priority: Vec<usize>,
 }
 
 #[derive(Debug, Clone)]
@@ -153,6 +158,7 @@ pub fn expand(m: &Model) -> Result<Expanded, Vec<Error>> {
             handled: d.sequence.len(),
             most_present: m.inventories[order.inventory].entries.len(),
             any_order: false,
+            priority: Vec::new(),
         });
     }
     // Every block's size is counted before anything is generated: one
@@ -336,6 +342,11 @@ fn demo_set(m: &Model, index: usize, d: &DemosDef, first_demo: usize) -> Result<
         handled: 0,
         most_present: 0,
         any_order: d.sequence == packwright_grammar::ast::SequenceMode::Random,
+        priority: if d.sequence == packwright_grammar::ast::SequenceMode::Listed {
+            c.entries.clone()
+        } else {
+            Vec::new()
+        },
     };
     let entries = m.inventories[d.inventory].entries.len();
     for demo in demonstrations::generated(m, d, kept) {
