@@ -443,17 +443,10 @@ impl Checker {
             // `Arm::flange_pose`).
             let flange = links[DOF] * self.arm.flange;
             let (hp, cuboid) = h.padded_box(&flange, self.held_padding);
-            let aabb = cuboid.compute_aabb(&hp);
-            let name = || Body::Held(h.name.clone());
-            let obstacles = self.statics.iter().chain(&self.products);
-            for o in obstacles.filter(|o| !is(o, held_name) && !is(o, ignore)) {
-                if aabb.intersects(&o.aabb) && intersects(&hp, &cuboid, &o.pose, &*o.shape) {
-                    return Some(Hit::Bodies {
-                        a: name(),
-                        b: o.body.clone(),
-                    });
-                }
+            if let Some(hit) = self.held_meets_obstacles(h, (&hp, &cuboid), ignore) {
+                return Some(hit);
             }
+            let name = || Body::Held(h.name.clone());
             for (part, (p, _)) in self.parts.iter().zip(placed) {
                 if part.part < DOF && intersects(&hp, &cuboid, p, &*part.shape) {
                     return Some(Hit::Bodies {
@@ -464,6 +457,44 @@ impl Checker {
             }
         }
         None
+    }
+
+    /// The first obstacle the held product's padded box (`at` its pose)
+    /// meets, but the product itself and the one `ignore` names.
+    fn held_meets_obstacles(
+        &self,
+        h: &Held,
+        (at, cuboid): (&Pose, &Cuboid),
+        ignore: Option<&str>,
+    ) -> Option<Hit> {
+        let is = |o: &Obstacle, name: Option<&str>| match &o.body {
+            Body::Product(n) => Some(n.as_str()) == name,
+            _ => false,
+        };
+        let aabb = cuboid.compute_aabb(at);
+        self.statics
+            .iter()
+            .chain(&self.products)
+            .filter(|o| !is(o, Some(h.name.as_str())) && !is(o, ignore))
+            .find(|o| aabb.intersects(&o.aabb) && intersects(at, cuboid, &o.pose, &*o.shape))
+            .map(|o| Hit::Bodies {
+                a: Body::Held(h.name.clone()),
+                b: o.body.clone(),
+            })
+    }
+
+    /// [`Checker::check`] of the held product against the obstacles alone
+    /// (not the arm, nor the arm against anything): the check between two
+    /// configurations a full check passed, where the product moves farther
+    /// than its padding covers while the arm, padded more, does not.
+    pub fn check_held(&self, q: &Joints, held: &Held, touch: Option<Touch>) -> Option<Hit> {
+        if q.iter().any(|v| !v.is_finite()) {
+            return Some(Hit::InvalidJoints);
+        }
+        let links = self.arm.link_poses(&self.base, q);
+        let flange = links[DOF] * self.arm.flange;
+        let (hp, cuboid) = held.padded_box(&flange, self.held_padding);
+        self.held_meets_obstacles(held, (&hp, &cuboid), touch.map(Touch::product))
     }
 
     /// The most a held product may move between two checked

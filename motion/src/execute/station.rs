@@ -1075,32 +1075,39 @@ fn straight_shares(
 /// How far a check of a motion got: its samples before `from` passed,
 /// the last of them checked being `last` (the start when none was).
 /// How far a check of a motion's samples got: the first sample not yet
-/// checked, and the configuration checked last with the held product's
-/// lever arms there.
+/// checked, the configuration fully checked last, and the one where the
+/// held product was checked last (the same, or later) with the product's
+/// lever arms at the full check.
 #[derive(Debug, Clone, Copy)]
 struct Checked {
     from: usize,
     last: Joints,
+    held_last: Joints,
     levers: LeverArms,
 }
 
 impl Checked {
-    /// Checked up to sample `from`, last at `q`, where `held` (the next
-    /// sample's) hangs from the cup.
+    /// Fully checked up to sample `from`, last at `q`, where `held` (the
+    /// next sample's) hangs from the cup.
     fn at(checker: &Checker, from: usize, q: Joints, held: Option<&Held>) -> Checked {
         Checked {
             from,
             last: q,
+            held_last: q,
             levers: checker.lever_arms(&q, held),
         }
     }
 
-    /// Whether `q` is too far from the last checked configuration to
-    /// follow it unchecked: a joint a degree away, or the held product
-    /// moved [`Checker::held_step`].
-    fn far(&self, checker: &Checker, q: &Joints) -> bool {
+    /// Whether `q` is a degree or more from the last full check in some
+    /// joint: the arm, padded by a centimetre, must be checked again.
+    fn far(&self, q: &Joints) -> bool {
         span(q, &self.last) >= MAX_STEP
-            || held_move(&self.levers, &self.last, q) >= checker.held_step()
+    }
+
+    /// Whether the held product at `q` has moved [`Checker::held_step`]
+    /// or more since it was last checked.
+    fn held_far(&self, checker: &Checker, q: &Joints) -> bool {
+        held_move(&self.levers, &self.held_last, q) >= checker.held_step()
     }
 }
 
@@ -1141,17 +1148,34 @@ fn first_collision<'h>(
         let leg = motion.leg_at(i);
         let last_one = i + 1 == samples.len();
         let changes = !last_one && motion.leg_at(i + 1) != leg;
-        let far = samples
-            .get(i + 1)
-            .is_none_or(|next| done.far(checker, next));
-        if !(last_one || changes || far) {
-            continue;
-        }
+        let next = samples.get(i + 1);
+        let far = next.is_none_or(|next| done.far(next));
         let load = load_of(leg);
         // The product a leg ignores is ignored on its straight segment
         // only: a transition's commands must keep the cup off it too.
         let ignore = if motion.shaped(i) { None } else { load.ignore };
-        let hit = if done.far(checker, q) {
+        if !(last_one || changes || far) {
+            // Between full checks, the held product alone, as often as it
+            // moves its padding's worth.
+            if let Some(held) = load.held
+                && next.is_some_and(|next| done.held_far(checker, next))
+            {
+                // One command can move it farther (a fast swing far out):
+                // the way to it in steps.
+                let (from, moved) = (done.held_last, held_move(&done.levers, &done.held_last, q));
+                let steps = (moved / checker.held_step()).ceil().max(1.0) as usize;
+                for k in 1..=steps {
+                    let t = k as f64 / steps as f64;
+                    let at: Joints = std::array::from_fn(|j| from[j] + (q[j] - from[j]) * t);
+                    if let Some(hit) = checker.check_held(&at, held, ignore) {
+                        return Some((i, hit));
+                    }
+                }
+                done.held_last = *q;
+            }
+            continue;
+        }
+        let hit = if done.far(q) || done.held_far(checker, q) {
             checker.check_motion(&done.last, q, load.held, ignore)
         } else {
             checker.check(q, load.held, ignore)

@@ -318,3 +318,94 @@ fn the_start_pose_keeps_clear_of_the_products_waiting_under_it() {
         "a clear start changed"
     );
 }
+
+/// The motion an independent probe found (a UR10 on a 400 mm riser
+/// carrying a 70 x 70 x 150 mm vase 80 mm above the table past a 140 mm
+/// lamp): its smoothed commands, checked as they will be sent with the
+/// vase held, meet the lamp, whose corner the vase grazes between
+/// commands a degree apart (`collision::tests` has the geometry).
+#[test]
+fn a_carried_product_grazing_a_neighbour_between_full_checks_is_found() {
+    use crate::collision::ProductBody;
+    use packwright_interface::scene::{BoxSpec, CellScene};
+    use std::f64::consts::FRAC_PI_2;
+    let arm = Arm::ur10();
+    let cell = CellScene {
+        name: "edge".into(),
+        base: [0.0, 0.0, 0.4],
+        suction: 0.06,
+        lift: 0.08,
+        speed: 1.0,
+        grip_settle: 0.1,
+        release_settle: 0.5,
+        descent: 1.0,
+        pending: ([0.55, -0.9], [0.85, -0.55]),
+        boxes: vec![BoxSpec {
+            name: "carton".into(),
+            centre: [0.55, 0.85],
+            size: [0.32, 0.26, 0.3],
+        }],
+        slots: vec![],
+    };
+    let mut checker = Checker::new(&arm, &cell);
+    checker.set_products(&[ProductBody {
+        name: "lamp".into(),
+        centre: [0.7844, -0.6469, 0.07],
+        size: [0.08, 0.06, 0.14],
+        yaw: 0.0,
+    }]);
+    let mut exact = Checker::with_padding(&arm, &cell, 0.0, 0.0);
+    exact.set_products(&[ProductBody {
+        name: "lamp".into(),
+        centre: [0.7844, -0.6469, 0.07],
+        size: [0.08, 0.06, 0.14],
+        yaw: 0.0,
+    }]);
+    let vase = Held::under_cup("vase", [0.07, 0.07, 0.15], 0.06, nalgebra::Vector3::zeros());
+    let a: Joints = [
+        2.2699418, -0.6469222, 1.6674664, -2.5912656, -FRAC_PI_2, -2.4379699,
+    ];
+    let b: Joints = [
+        2.2738583, -0.6477525, 1.6655460, -2.5885238, -FRAC_PI_2, -2.4339118,
+    ];
+    let most = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (y - x).abs())
+        .fold(0.0, f64::max);
+    let along = |s: f64| -> Joints { std::array::from_fn(|j| a[j] + (b[j] - a[j]) * s / most) };
+    // Motions of a degree and a half across the graze, from each of 160
+    // starts: the commands' full checks fall a degree apart, anywhere
+    // along it.
+    let mut tried = 0;
+    for k in 0..160 {
+        let s0 = -0.04 + 0.00025 * k as f64;
+        let (from, to) = (along(s0), along(s0 + 0.026));
+        if [from, to]
+            .iter()
+            .any(|q| checker.check(q, Some(&vase), None).is_some())
+        {
+            continue;
+        }
+        // Only motions whose straight way the vase itself meets the lamp
+        // on (400 steps, no padding).
+        let grazes = (0..=400).any(|t| {
+            let q: Joints = std::array::from_fn(|j| from[j] + (to[j] - from[j]) * t as f64 / 400.0);
+            exact.check(&q, Some(&vase), None).is_some()
+        });
+        if !grazes {
+            continue;
+        }
+        tried += 1;
+        let checked = checked_samples(&arm, &checker, from, &[to], Load::holding(&vase));
+        assert!(
+            matches!(
+                checked,
+                Err(Unchecked::Collides(Hit::Bodies { b: packwright_interface::world::Body::Product(ref n), .. })) if n == "lamp"
+            ),
+            "from {s0} rad on: {:?}",
+            checked.map(|s| s.len())
+        );
+    }
+    assert!(tried >= 8, "{tried} grazing motions with both ends free");
+}
