@@ -9,11 +9,11 @@ mod common;
 use common::{bench_cell, product_motion};
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use packwright_kinematics::Arm;
 use packwright_motion::blend::blend;
-use packwright_motion::collision::{Checker, ProductBody};
-use packwright_motion::execute::{Load, checked_blend, reach};
+use packwright_motion::collision::{Checker, Held, ProductBody};
+use packwright_motion::execute::{Load, checked_blend, checked_blend_by, reach};
 use packwright_motion::rrt::{self, Query, RrtConfig};
 use std::f64::consts::FRAC_PI_2;
 use std::hint::black_box;
@@ -111,6 +111,28 @@ fn bench(c: &mut Criterion) {
             )
         })
     });
+    // The same with each leg's load as a planner gives it: the cup comes
+    // down onto P1, lifts it off the table, carries it to the slot and
+    // leaves it; the held product is checked as often as it moves 4 mm.
+    let p1 = Held::under_cup("P1", [0.05; 3], cell.suction, Vector3::zeros());
+    let lifting = p1.clone().leaving_support();
+    let load_of = |k: usize| match k {
+        0 | 1 => Load::picking("P1"),
+        2 => Load::holding(&lifting),
+        3..=5 => Load::holding(&p1),
+        _ => Load::released("P1"),
+    };
+    let checked = checked_blend_by(&arm, &checker, start, &product, &stops, load_of);
+    assert!(
+        checked.is_ok(),
+        "the held product's motion passes its check"
+    );
+    c.bench_function(
+        "blend a product's 7 sub-goals and check them, the product held",
+        |b| {
+            b.iter(|| checked_blend_by(&arm, &checker, black_box(start), &product, &stops, load_of))
+        },
+    );
 }
 
 criterion_group!(benches, bench);

@@ -30,8 +30,8 @@ pub use learned::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps
 pub use reachable::{Reachability, Unreached};
 pub use reasoner::{demonstrated_decisions, expected_next, graph, reasoner_trial};
 pub use station::{
-    HOME_HEIGHT, Load, PlanningBudget, STOP_CLEARANCE, Unchecked, checked_blend, checked_samples,
-    home, home_among, home_tip, reach,
+    HOME_HEIGHT, Load, PlanningBudget, STOP_CLEARANCE, Unchecked, checked_blend, checked_blend_by,
+    checked_samples, home, home_among, home_tip, reach,
 };
 
 use packwright_interface::outcome::{PlannerKind, Report};
