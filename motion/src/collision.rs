@@ -52,7 +52,7 @@ pub const MAX_STEP: f64 = std::f64::consts::PI / 180.0;
 /// coarse for it: a 70 mm vase carried 0.9 m from the base moved 16 mm
 /// between checks and grazed a neighbouring product's corner, which a
 /// check of the commands in between would have seen (found by a probe of
-/// hand-written cells; `tests/expert.rs`).
+/// hand-written cells; `tests::a_held_product_is_checked_between_the_checked_configurations`).
 pub const HELD_MOVE_SHARE: f64 = 4.0 / 3.0;
 
 /// The held product's move allowed between checks when its padding is
@@ -142,6 +142,11 @@ fn cup_bottom(flange: &Isometry3<f64>, suction: f64) -> f64 {
 }
 
 impl Obstacle {
+    /// Whether this is the product `name` names (none when `None`).
+    fn is_product(&self, name: Option<&str>) -> bool {
+        matches!(&self.body, Body::Product(n) if Some(n.as_str()) == name)
+    }
+
     fn new(body: Body, centre: [f64; 3], half: [f64; 3], yaw: f64) -> Obstacle {
         let iso = Isometry3::new(
             Vector3::new(centre[0], centre[1], centre[2]),
@@ -396,17 +401,13 @@ impl Checker {
             .reduce(|a, b| a.merged(&b))
             .unwrap_or_else(Aabb::new_invalid);
         let held_name = held.map(|h| h.name.as_str());
-        let is = |o: &Obstacle, name: Option<&str>| match &o.body {
-            Body::Product(n) => Some(n.as_str()) == name,
-            _ => false,
-        };
         // The obstacles near the arm, the held product never one of them
         // (on the stack up to STACK_NEAR of them).
         let near: SmallVec<[&Obstacle; STACK_NEAR]> = self
             .statics
             .iter()
             .chain(&self.products)
-            .filter(|o| !is(o, held_name) && o.aabb.intersects(&whole))
+            .filter(|o| !o.is_product(held_name) && o.aabb.intersects(&whole))
             .collect();
         let ignore = touch.map(Touch::product);
         // Where the cup meets the touched product: its lowest point.
@@ -414,8 +415,11 @@ impl Checker {
         for (part, (p, aabb)) in self.parts.iter().zip(placed) {
             let by_cup = part.part == CUP;
             for &o in &near {
-                let touched =
-                    || by_cup && is(o, ignore) && touch.is_some_and(|t| t.allows(bottom(), o.top));
+                let touched = || {
+                    by_cup
+                        && o.is_product(ignore)
+                        && touch.is_some_and(|t| t.allows(bottom(), o.top))
+                };
                 if (o.is_table && part.part <= 1) || touched() {
                     continue;
                 }
@@ -467,15 +471,11 @@ impl Checker {
         (at, cuboid): (&Pose, &Cuboid),
         ignore: Option<&str>,
     ) -> Option<Hit> {
-        let is = |o: &Obstacle, name: Option<&str>| match &o.body {
-            Body::Product(n) => Some(n.as_str()) == name,
-            _ => false,
-        };
         let aabb = cuboid.compute_aabb(at);
         self.statics
             .iter()
             .chain(&self.products)
-            .filter(|o| !is(o, Some(h.name.as_str())) && !is(o, ignore))
+            .filter(|o| !o.is_product(Some(h.name.as_str())) && !o.is_product(ignore))
             .find(|o| aabb.intersects(&o.aabb) && intersects(at, cuboid, &o.pose, &*o.shape))
             .map(|o| Hit::Bodies {
                 a: Body::Held(h.name.clone()),
@@ -570,6 +570,69 @@ impl Checker {
             let q: Joints = std::array::from_fn(|j| q0[j] + (q1[j] - q0[j]) * t);
             self.check(&q, held, touch)
         })
+    }
+}
+
+/// The motion an independent probe found, for tests: a UR10 on a 400 mm
+/// riser carrying a 70 x 70 x 150 mm vase 80 mm above the table past a
+/// 140 mm lamp waiting beside it, whose corner the vase grazes between
+/// configurations a degree apart.
+#[cfg(test)]
+pub(crate) mod graze {
+    use super::{Held, ProductBody};
+    use nalgebra::Vector3;
+    use packwright_interface::scene::{BoxSpec, CellScene};
+    use packwright_kinematics::Joints;
+    use std::f64::consts::FRAC_PI_2;
+
+    pub fn cell() -> CellScene {
+        CellScene {
+            name: "edge".into(),
+            base: [0.0, 0.0, 0.4],
+            suction: 0.06,
+            lift: 0.08,
+            speed: 1.0,
+            grip_settle: 0.1,
+            release_settle: 0.5,
+            descent: 1.0,
+            pending: ([0.55, -0.9], [0.85, -0.55]),
+            boxes: vec![BoxSpec {
+                name: "carton".into(),
+                centre: [0.55, 0.85],
+                size: [0.32, 0.26, 0.3],
+            }],
+            slots: vec![],
+        }
+    }
+
+    pub fn lamp() -> ProductBody {
+        ProductBody {
+            name: "lamp".into(),
+            centre: [0.7844, -0.6469, 0.07],
+            size: [0.08, 0.06, 0.14],
+            yaw: 0.0,
+        }
+    }
+
+    pub fn vase() -> Held {
+        Held::under_cup("vase", [0.07, 0.07, 0.15], 0.06, Vector3::zeros())
+    }
+
+    /// `s` radians of the joint that moves most along the way, from one of
+    /// two commands the simulator sent on it, 2 ms apart or so.
+    pub fn along(s: f64) -> Joints {
+        let a: Joints = [
+            2.2699418, -0.6469222, 1.6674664, -2.5912656, -FRAC_PI_2, -2.4379699,
+        ];
+        let b: Joints = [
+            2.2738583, -0.6477525, 1.6655460, -2.5885238, -FRAC_PI_2, -2.4339118,
+        ];
+        let most = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (y - x).abs())
+            .fold(0.0, f64::max);
+        std::array::from_fn(|j| a[j] + (b[j] - a[j]) * s / most)
     }
 }
 
@@ -751,43 +814,14 @@ mod tests {
     /// something.
     #[test]
     fn a_held_product_is_checked_between_the_checked_configurations() {
+        use super::graze::{self, along};
         let arm = Arm::ur10();
-        let cell = CellScene {
-            base: [0.0, 0.0, 0.4],
-            suction: 0.06,
-            lift: 0.08,
-            pending: ([0.55, -0.9], [0.85, -0.55]),
-            ..cell()
-        };
-        let lamp = [ProductBody {
-            name: "lamp".into(),
-            centre: [0.7844, -0.6469, 0.07],
-            size: [0.08, 0.06, 0.14],
-            yaw: 0.0,
-        }];
+        let cell = graze::cell();
         let mut padded = Checker::new(&arm, &cell);
-        padded.set_products(&lamp);
+        padded.set_products(&[graze::lamp()]);
         let mut exact = Checker::with_padding(&arm, &cell, 0.0, 0.0);
-        exact.set_products(&lamp);
-        let vase = Held::under_cup("vase", [0.07, 0.07, 0.15], 0.06, Vector3::zeros());
-        use std::f64::consts::FRAC_PI_2;
-        // Two commands the simulator sent on the way, 2 ms apart or so.
-        let a: Joints = [
-            2.2699418, -0.6469222, 1.6674664, -2.5912656, -FRAC_PI_2, -2.4379699,
-        ];
-        let b: Joints = [
-            2.2738583, -0.6477525, 1.6655460, -2.5885238, -FRAC_PI_2, -2.4339118,
-        ];
-        // `s` radians of the joint that moves most, along that way.
-        let most = a
-            .iter()
-            .zip(&b)
-            .map(|(x, y)| (y - x).abs())
-            .fold(0.0, f64::max);
-        let along = |s: f64| -> Joints {
-            let k = s / most;
-            std::array::from_fn(|j| a[j] + (b[j] - a[j]) * k)
-        };
+        exact.set_products(&[graze::lamp()]);
+        let vase = graze::vase();
         let (mut grazes, mut missed_by_degrees) = (0, 0);
         for i in 0..=40 {
             let s0 = -MAX_STEP + MAX_STEP * i as f64 / 40.0;

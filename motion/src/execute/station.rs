@@ -1072,8 +1072,6 @@ fn straight_shares(
         .collect()
 }
 
-/// How far a check of a motion got: its samples before `from` passed,
-/// the last of them checked being `last` (the start when none was).
 /// How far a check of a motion's samples got: the first sample not yet
 /// checked, the configuration fully checked last, and the one where the
 /// held product was checked last (the same, or later) with the product's

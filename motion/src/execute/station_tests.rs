@@ -326,54 +326,14 @@ fn the_start_pose_keeps_clear_of_the_products_waiting_under_it() {
 /// commands a degree apart (`collision::tests` has the geometry).
 #[test]
 fn a_carried_product_grazing_a_neighbour_between_full_checks_is_found() {
-    use crate::collision::ProductBody;
-    use packwright_interface::scene::{BoxSpec, CellScene};
-    use std::f64::consts::FRAC_PI_2;
+    use crate::collision::graze::{self, along};
     let arm = Arm::ur10();
-    let cell = CellScene {
-        name: "edge".into(),
-        base: [0.0, 0.0, 0.4],
-        suction: 0.06,
-        lift: 0.08,
-        speed: 1.0,
-        grip_settle: 0.1,
-        release_settle: 0.5,
-        descent: 1.0,
-        pending: ([0.55, -0.9], [0.85, -0.55]),
-        boxes: vec![BoxSpec {
-            name: "carton".into(),
-            centre: [0.55, 0.85],
-            size: [0.32, 0.26, 0.3],
-        }],
-        slots: vec![],
-    };
+    let cell = graze::cell();
     let mut checker = Checker::new(&arm, &cell);
-    checker.set_products(&[ProductBody {
-        name: "lamp".into(),
-        centre: [0.7844, -0.6469, 0.07],
-        size: [0.08, 0.06, 0.14],
-        yaw: 0.0,
-    }]);
+    checker.set_products(&[graze::lamp()]);
     let mut exact = Checker::with_padding(&arm, &cell, 0.0, 0.0);
-    exact.set_products(&[ProductBody {
-        name: "lamp".into(),
-        centre: [0.7844, -0.6469, 0.07],
-        size: [0.08, 0.06, 0.14],
-        yaw: 0.0,
-    }]);
-    let vase = Held::under_cup("vase", [0.07, 0.07, 0.15], 0.06, nalgebra::Vector3::zeros());
-    let a: Joints = [
-        2.2699418, -0.6469222, 1.6674664, -2.5912656, -FRAC_PI_2, -2.4379699,
-    ];
-    let b: Joints = [
-        2.2738583, -0.6477525, 1.6655460, -2.5885238, -FRAC_PI_2, -2.4339118,
-    ];
-    let most = a
-        .iter()
-        .zip(&b)
-        .map(|(x, y)| (y - x).abs())
-        .fold(0.0, f64::max);
-    let along = |s: f64| -> Joints { std::array::from_fn(|j| a[j] + (b[j] - a[j]) * s / most) };
+    exact.set_products(&[graze::lamp()]);
+    let vase = graze::vase();
     // Motions of a degree and a half across the graze, from each of 160
     // starts: the commands' full checks fall a degree apart, anywhere
     // along it.
