@@ -1294,8 +1294,20 @@ pub fn generated_variant(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use packwright_compiler::{MemoryLoader, check};
+    use packwright_compiler::{Compiled, MemoryLoader, check};
     use std::path::PathBuf;
+
+    /// `text` (a generated cell's, or one made from it) checked as `g`'s
+    /// file with the UR10's reach; a panic with the diagnostics if not.
+    fn compiled(g: &Generated, text: &str) -> Compiled {
+        let loader = MemoryLoader::new().with(g.file_name(), text.to_owned());
+        check(
+            &loader,
+            &[PathBuf::from(g.file_name())],
+            &crate::reach::RobotWorkspace::new(),
+        )
+        .unwrap_or_else(|failed| panic!("seed {}:\n{}\n{text}", g.seed, failed.render()))
+    }
 
     #[test]
     fn demonstration_counts_follow_the_compiler() {
@@ -1323,15 +1335,7 @@ mod tests {
             let g = family_cell(seed);
             assert_eq!(g, family_cell(seed));
             assert_eq!(packwright_grammar::format(&g.text).unwrap(), g.text);
-            let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
-            let compiled = match check(
-                &loader,
-                &[PathBuf::from(g.file_name())],
-                &crate::reach::RobotWorkspace::new(),
-            ) {
-                Ok(c) => c,
-                Err(failed) => panic!("seed {seed}:\n{}\n{}", failed.render(), g.text),
-            };
+            let compiled = compiled(&g, &g.text);
             assert_eq!(
                 compiled.demonstrations().expect("demonstrations").len(),
                 g.demonstrations
@@ -1366,13 +1370,7 @@ mod tests {
                 let before =
                     |text: &str| text.split("\n# Sparse teaching").next().map(str::to_owned);
                 assert_eq!(before(&g.text), before(&own.text), "seed {seed}");
-                let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
-                let checked = check(
-                    &loader,
-                    &[PathBuf::from(g.file_name())],
-                    &crate::reach::RobotWorkspace::new(),
-                );
-                assert!(checked.is_ok(), "seed {seed}, {rule:?}");
+                compiled(&g, &g.text);
             }
         }
     }
@@ -1417,15 +1415,7 @@ mod tests {
                     assert!(g.text.contains(&line), "seed {seed}: {line}");
                 }
                 assert_eq!(packwright_grammar::format(&g.text).unwrap(), g.text);
-                let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
-                let compiled = match check(
-                    &loader,
-                    &[PathBuf::from(g.file_name())],
-                    &crate::reach::RobotWorkspace::new(),
-                ) {
-                    Ok(c) => c,
-                    Err(failed) => panic!("seed {seed}:\n{}\n{}", failed.render(), g.text),
-                };
+                let compiled = compiled(&g, &g.text);
                 assert_eq!(compiled.demonstrations().expect("demonstrations").len(), 3);
                 let inferred = cell_rule(&compiled, &g.name)
                     .expect("one rule")
@@ -1449,13 +1439,7 @@ mod tests {
             (Sequence::Listed, 4),
         ] {
             let g = family_cell_taught(seed, Some(rule));
-            let loader = MemoryLoader::new().with(g.file_name(), g.text.clone());
-            let compiled = check(
-                &loader,
-                &[PathBuf::from(g.file_name())],
-                &crate::reach::RobotWorkspace::new(),
-            )
-            .expect("compiles");
+            let compiled = compiled(&g, &g.text);
             let inferred = cell_rule(&compiled, &g.name)
                 .expect("one rule")
                 .expect("demonstrations");
@@ -1484,13 +1468,7 @@ mod tests {
             .text
             .replace("  sequence ascending\n", "  sequence random\n");
         assert_ne!(text, g.text);
-        let loader = MemoryLoader::new().with(g.file_name(), text);
-        let compiled = check(
-            &loader,
-            &[PathBuf::from(g.file_name())],
-            &crate::reach::RobotWorkspace::new(),
-        )
-        .expect("compiles");
+        let compiled = compiled(&g, &text);
         assert_eq!(cell_rule(&compiled, &g.name).ok(), Some(None));
     }
 }
