@@ -37,28 +37,24 @@ if ! command -v jq >/dev/null; then
 fi
 model=${MODEL:-models/default}
 limit=${LIMIT:-50}
-family=${FAMILY:-standard}
-case $family in
-  standard) prefix=gen ;;
-  wide) prefix=wide ;;
-  compact) prefix=compact ;;
-  *) echo "bundled.sh: FAMILY must be standard, wide or compact, not $family" >&2; exit 2 ;;
-esac
 read -ra eval_args <<<"${EVAL_ARGS:-}"
 work=${WORK:-$(mktemp -d "${TMPDIR:-/tmp}/packwright-bundled.XXXXXX")}
 mkdir -p "$work"
 
+reports=()
 for seed in "$@"; do
-  cell=${prefix}_$seed
-  echo "== $cell" >&2
-  "$bin" generate --family "$family" --seed "$seed" -o "$work" >/dev/null
-  "$bin" eval "$work/$cell.pack" --model "$model" --limit "$limit" --quiet \
-    ${eval_args[@]+"${eval_args[@]}"} --json >"$work/$cell.eval.json"
+  # `generate` prints the file it wrote (and refuses a FAMILY it has not).
+  pack=$("$bin" generate --family "${FAMILY:-standard}" --seed "$seed" -o "$work")
+  echo "== $(basename "$pack" .pack)" >&2
+  report=${pack%.pack}.eval.json
+  "$bin" eval "$pack" --model "$model" --limit "$limit" --quiet \
+    ${eval_args[@]+"${eval_args[@]}"} --json >"$report"
+  reports+=("$report")
 done
 
 echo "files in $work"
 # One line per planner: the counts summed over every suite of every cell.
-for seed in "$@"; do cat "$work/${prefix}_$seed.eval.json"; done | jq -rs '
+cat "${reports[@]}" | jq -rs '
   [.[].rows[]] | group_by(.planner)[] |
   {
     planner: .[0].planner,

@@ -50,20 +50,14 @@ read -ra eval_args <<<"${EVAL_ARGS---baselines}"
 read -ra generate_args <<<"${GENERATE_ARGS:-}"
 work=${WORK:-$(mktemp -d "${TMPDIR:-/tmp}/packwright-family.XXXXXX")}
 mkdir -p "$work"
-family=${FAMILY:-standard}
-case $family in
-  standard) prefix=gen ;;
-  wide) prefix=wide ;;
-  compact) prefix=compact ;;
-  *) echo "family.sh: FAMILY must be standard, wide or compact, not $family" >&2; exit 2 ;;
-esac
 
+reports=()
 for seed in "${seeds[@]}"; do
-  cell=${prefix}_$seed
-  pack=$work/$cell.pack
+  # `generate` prints the file it wrote (and refuses a FAMILY it has not).
+  pack=$("$bin" generate --family "${FAMILY:-standard}" --seed "$seed" -o "$work" \
+    ${generate_args[@]+"${generate_args[@]}"})
+  cell=$(basename "$pack" .pack)
   echo "== $cell" >&2
-  "$bin" generate --family "$family" --seed "$seed" -o "$work" \
-    ${generate_args[@]+"${generate_args[@]}"} >/dev/null
   "$bin" compile "$pack" -o "$work/$cell.out" >&2
   # Exit 1: some demonstration could not be replayed; the model is written.
   rc=0
@@ -76,20 +70,21 @@ for seed in "${seeds[@]}"; do
   "$bin" eval "$pack" --model "$work/$cell.model" --quiet \
     ${eval_args[@]+"${eval_args[@]}"} --json \
     >"$work/$cell.eval.json"
+  reports+=("$work/$cell.eval.json")
 done
 
 # Summary: one row per suite and planner (SR = whole-system success rate).
 echo "files in $work"
 if ! command -v jq >/dev/null; then
-  echo "(install jq for the summary table; the figures are in $work/${prefix}_*.eval.json)"
+  echo "(install jq for the summary table; the figures are in $work/*.eval.json)"
   exit 0
 fi
 {
   printf 'suite\tplanner\tscenarios\treasoner SR\tSR\n'
-  for seed in "${seeds[@]}"; do
+  for report in "${reports[@]}"; do
     jq -r '
       def pct: if . == null then "-" else (.rate * 100 | round / 100 | tostring) end;
       .rows[] | [.suite, .planner, .scenarios, (.reasoner_sr | pct), (.sr | pct)] | @tsv
-    ' "$work/${prefix}_$seed.eval.json"
+    ' "$report"
   done
 } | column -t -s $'\t'
