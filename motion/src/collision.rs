@@ -497,6 +497,25 @@ impl Checker {
         self.held_meets_obstacles(held, (&hp, &cuboid), touch.map(Touch::product))
     }
 
+    /// [`Checker::check_held`] along the straight joint-space motion from
+    /// `q0` (where the product's lever arms are `levers`) to `q1`, at steps
+    /// in which it moves at most [`Checker::held_step`] (`q1` included,
+    /// `q0` not: it was checked).
+    pub fn check_held_motion(
+        &self,
+        q0: &Joints,
+        q1: &Joints,
+        levers: &LeverArms,
+        held: &Held,
+        touch: Option<Touch>,
+    ) -> Option<Hit> {
+        let steps = (held_move(levers, q0, q1) / self.held_step())
+            .ceil()
+            .max(1.0) as usize;
+        (1..=steps)
+            .find_map(|k| self.check_held(&lerp(q0, q1, k as f64 / steps as f64), held, touch))
+    }
+
     /// The most a held product may move between two checked
     /// configurations (m): [`HELD_MOVE_SHARE`] of its padding.
     pub fn held_step(&self) -> f64 {
@@ -565,12 +584,14 @@ impl Checker {
             .ceil()
             .max((moved / self.held_step()).ceil())
             .max(1.0) as usize;
-        (0..=steps).find_map(|k| {
-            let t = k as f64 / steps as f64;
-            let q: Joints = std::array::from_fn(|j| q0[j] + (q1[j] - q0[j]) * t);
-            self.check(&q, held, touch)
-        })
+        (0..=steps).find_map(|k| self.check(&lerp(q0, q1, k as f64 / steps as f64), held, touch))
     }
+}
+
+/// The configuration a share `t` of the way from `a` to `b`, joint by
+/// joint.
+fn lerp(a: &Joints, b: &Joints, t: f64) -> Joints {
+    std::array::from_fn(|j| a[j] + (b[j] - a[j]) * t)
 }
 
 /// The motion an independent probe found, for tests: a UR10 on a 400 mm

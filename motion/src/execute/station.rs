@@ -1160,14 +1160,10 @@ fn first_collision<'h>(
             {
                 // One command can move it farther (a fast swing far out):
                 // the way to it in steps.
-                let (from, moved) = (done.held_last, held_move(&done.levers, &done.held_last, q));
-                let steps = (moved / checker.held_step()).ceil().max(1.0) as usize;
-                for k in 1..=steps {
-                    let t = k as f64 / steps as f64;
-                    let at: Joints = std::array::from_fn(|j| from[j] + (q[j] - from[j]) * t);
-                    if let Some(hit) = checker.check_held(&at, held, ignore) {
-                        return Some((i, hit));
-                    }
+                if let Some(hit) =
+                    checker.check_held_motion(&done.held_last, q, &done.levers, held, ignore)
+                {
+                    return Some((i, hit));
                 }
                 done.held_last = *q;
             }
