@@ -113,7 +113,7 @@ fn bench(c: &mut Criterion) {
     });
     // The same with each leg's load as a planner gives it: the cup comes
     // down onto P1, lifts it off the table, carries it to the slot and
-    // leaves it; the held product is checked as often as it moves 4 mm.
+    // leaves it; the held product is swept between checked commands.
     let p1 = Held::under_cup("P1", [0.05; 3], cell.suction, Vector3::zeros());
     let lifting = p1.clone().leaving_support();
     let load_of = |k: usize| match k {

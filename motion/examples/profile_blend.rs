@@ -8,17 +8,18 @@
 //! The argument is the number of checked blends (default 20); `blend`
 //! as a second argument times the blend alone, `one` the checked
 //! straight motion of one sub-goal (the hover to the approach, a long
-//! one), as a planner joins a sub-goal.
+//! one), as a planner joins a sub-goal; `held` the checked blend with
+//! each leg's load, as the bench's "the product held" variant.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 use common::{bench_cell, product_motion};
 
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use packwright_kinematics::Arm;
 use packwright_motion::blend::blend;
-use packwright_motion::collision::{Checker, ProductBody};
-use packwright_motion::execute::{Load, checked_blend, reach};
+use packwright_motion::collision::{Checker, Held, ProductBody};
+use packwright_motion::execute::{Load, checked_blend, checked_blend_by, reach};
 use std::f64::consts::FRAC_PI_2;
 use std::hint::black_box;
 
@@ -30,6 +31,7 @@ fn main() {
     // One sub-goal: the straight checked motion from the hover to the
     // approach, as a planner joins a sub-goal.
     let one = mode.as_deref() == Some("one");
+    let held = mode.as_deref() == Some("held");
     let arm = Arm::ur10();
     let cell = bench_cell();
     let mut checker = Checker::new(&arm, &cell);
@@ -61,6 +63,15 @@ fn main() {
     let stops = product_motion::STOPS;
     let [x, y, z] = product_motion::START;
     let start = at(x, y, z);
+    // The bench's loads: down onto P1, lift it, carry it, leave it.
+    let p1 = Held::under_cup("P1", [0.05; 3], cell.suction, Vector3::zeros());
+    let lifting = p1.clone().leaving_support();
+    let load_of = |k: usize| match k {
+        0 | 1 => Load::picking("P1"),
+        2 => Load::holding(&lifting),
+        3..=5 => Load::holding(&p1),
+        _ => Load::released("P1"),
+    };
     let mut commands = 0;
     // A digest of the commands' bits (FNV-1a), to compare builds.
     let mut digest: u64 = 0xcbf2_9ce4_8422_2325;
@@ -75,6 +86,9 @@ fn main() {
                 cup_on_p1,
             )
             .expect("free")
+        } else if held {
+            checked_blend_by(&arm, &checker, black_box(start), &product, &stops, load_of)
+                .expect("free")
         } else if alone {
             blend(arm.limits, black_box(start), &product, &stops).expect("blends")
         } else {

@@ -113,6 +113,13 @@ impl Blended {
         self.corners.iter().any(|c| c.samples.contains(&i))
     }
 
+    /// Whether some sample of `range` was shaped by a transition.
+    pub fn shaped_within(&self, range: std::ops::Range<usize>) -> bool {
+        self.corners
+            .iter()
+            .any(|c| c.samples.start < range.end && range.start < c.samples.end)
+    }
+
     /// The blended corner (saved > 0) whose samples include sample `i`,
     /// else the blended corner nearest it: the one to cap or make a stop
     /// when sample `i` fails a check. `None` when no corner is blended.

@@ -9,7 +9,7 @@
 //! return.
 
 use crate::blend::{Blended, blend_straight};
-use crate::collision::{Checker, Held, LeverArms, MAX_STEP, ProductBody, Touch, held_move};
+use crate::collision::{Checker, Held, HeldPose, MAX_STEP, ProductBody, Touch};
 use crate::expert::{SubGoal, Suction};
 use crate::rrt::{self, Query, RrtConfig};
 use crate::smoothing::lower_bound;
@@ -1073,15 +1073,13 @@ fn straight_shares(
 }
 
 /// How far a check of a motion's samples got: the first sample not yet
-/// checked, the configuration fully checked last, and the one where the
-/// held product was checked last (the same, or later) with the product's
-/// lever arms at the full check.
+/// checked, the configuration fully checked last, and the held product's
+/// box there (for the next sample's load) to sweep it from.
 #[derive(Debug, Clone, Copy)]
 struct Checked {
     from: usize,
     last: Joints,
-    held_last: Joints,
-    levers: LeverArms,
+    held: Option<HeldPose>,
 }
 
 impl Checked {
@@ -1091,8 +1089,7 @@ impl Checked {
         Checked {
             from,
             last: q,
-            held_last: q,
-            levers: checker.lever_arms(&q, held),
+            held: held.map(|h| checker.held_pose(&q, h)),
         }
     }
 
@@ -1100,12 +1097,6 @@ impl Checked {
     /// joint: the arm, padded by a centimetre, must be checked again.
     fn far(&self, q: &Joints) -> bool {
         span(q, &self.last) >= MAX_STEP
-    }
-
-    /// Whether the held product at `q` has moved [`Checker::held_step`]
-    /// or more since it was last checked.
-    fn held_far(&self, checker: &Checker, q: &Joints) -> bool {
-        held_move(&self.levers, &self.held_last, q) >= checker.held_step()
     }
 }
 
@@ -1133,7 +1124,10 @@ fn span(a: &Joints, b: &Joints) -> f64 {
 /// a straight motion, with every checked configuration a commanded one.
 /// Where a checked sample is [`MAX_STEP`] or more from the one before
 /// (the first after `start` or after a resumed check), the straight motion
-/// between them is checked at that spacing instead.
+/// between them is checked at that spacing instead. A held product is
+/// swept from each checked sample to the next through the commands
+/// between ([`Checker::sweep`]), ignoring no product where a transition
+/// shaped any of them.
 fn first_collision<'h>(
     checker: &Checker,
     motion: &Blended,
@@ -1146,43 +1140,55 @@ fn first_collision<'h>(
         let leg = motion.leg_at(i);
         let last_one = i + 1 == samples.len();
         let changes = !last_one && motion.leg_at(i + 1) != leg;
-        let next = samples.get(i + 1);
-        let far = next.is_none_or(|next| done.far(next));
+        let far = samples.get(i + 1).is_none_or(|next| done.far(next));
+        if !(last_one || changes || far) {
+            continue;
+        }
         let load = load_of(leg);
         // The product a leg ignores is ignored on its straight segment
         // only: a transition's commands must keep the cup off it too.
         let ignore = if motion.shaped(i) { None } else { load.ignore };
-        if !(last_one || changes || far) {
-            // Between full checks, the held product alone, as often as it
-            // moves its padding's worth.
-            if let Some(held) = load.held
-                && next.is_some_and(|next| done.held_far(checker, next))
-            {
-                // One command can move it farther (a fast swing far out):
-                // the way to it in steps.
-                if let Some(hit) =
-                    checker.check_held_motion(&done.held_last, q, &done.levers, held, ignore)
-                {
-                    return Some((i, hit));
-                }
-                done.held_last = *q;
-            }
-            continue;
-        }
-        let hit = if done.far(q) || done.held_far(checker, q) {
-            checker.check_motion(&done.last, q, load.held, ignore)
+        // Far from the last full check: the straight motion to it, the
+        // held product swept along it.
+        let far = done.far(q);
+        let posed = if far {
+            checker.check_motion_posed(&done.last, q, load.held, ignore)
         } else {
-            checker.check(q, load.held, ignore)
+            checker.check_posed(q, load.held, ignore)
         };
-        if let Some(hit) = hit {
-            return Some((i, hit));
+        let at = match posed {
+            Ok(at) => at,
+            Err(hit) => return Some((i, hit)),
+        };
+        // The held product from the last full check to this one, through
+        // the commands between.
+        let between = &samples[done.from..i];
+        if let (Some(held), Some(from), Some(to), false) =
+            (load.held, &done.held, &at, far && between.is_empty())
+        {
+            let ignore = if motion.shaped_within(done.from..i + 1) {
+                None
+            } else {
+                load.ignore
+            };
+            if let Some(hit) = checker.sweep(&done.last, from, q, to, between, held, ignore) {
+                return Some((i, hit));
+            }
         }
         let next_held = if changes {
             load_of(motion.leg_at(i + 1)).held
         } else {
             load.held
         };
-        *done = Checked::at(checker, i + 1, *q, next_held);
+        *done = if next_held == load.held {
+            Checked {
+                from: i + 1,
+                last: *q,
+                held: at,
+            }
+        } else {
+            Checked::at(checker, i + 1, *q, next_held)
+        };
     }
     None
 }
