@@ -543,8 +543,11 @@ impl Checker {
             return Err(hit);
         }
         let name = || Body::Held(h.name.clone());
-        for (part, (p, _)) in self.parts.iter().zip(placed) {
-            if part.part < DOF && intersects(&hp, &cuboid, p, &*part.shape) {
+        for (part, (p, part_aabb)) in self.parts.iter().zip(placed) {
+            if part.part < DOF
+                && aabb.intersects(part_aabb)
+                && intersects(&hp, &cuboid, p, &*part.shape)
+            {
                 return Err(Hit::Bodies {
                     a: name(),
                     b: self.names[part.part].clone(),
