@@ -99,7 +99,9 @@ pub enum Command {
     /// rate (every decision right), the whole system's success rate with a
     /// Wilson 95% interval, with and without fallbacks, fallbacks per
     /// package, planning time per decision and per sub-goal (median and
-    /// p99, microseconds) and simulated execution time per product.
+    /// p99, microseconds) and simulated execution time per product; with
+    /// more than one suite, the same per planner over every scenario of
+    /// the run (`totals` in `--json`).
     Eval(EvalArgs),
     /// Lay out .pack files canonically (comments are kept).
     ///

@@ -135,8 +135,9 @@ fn eval_reports_every_planner_of_a_suite() {
         "orders/suites/measure.pack",
         "--suite",
         "m_case1_2of3",
+        "m_short_3of5",
         "--limit",
-        "3",
+        "2",
         "--baselines",
         "--quiet",
         "--json",
@@ -148,22 +149,43 @@ fn eval_reports_every_planner_of_a_suite() {
     assert_eq!(report["schema"], "packwright.eval/3");
     let rows = report["rows"].as_array().expect("rows");
     let planners: Vec<&str> = rows.iter().filter_map(|r| r["planner"].as_str()).collect();
-    assert_eq!(planners, ["learned", "rrt", "expert"]);
-    for r in rows {
-        assert_eq!(r["suite"], "m_case1_2of3");
-        assert_eq!(r["scenarios"], 3);
+    assert_eq!(
+        planners,
+        ["learned", "rrt", "expert", "learned", "rrt", "expert"]
+    );
+    for (r, suite) in rows
+        .iter()
+        .zip(["m_case1_2of3"; 3].iter().chain(&["m_short_3of5"; 3]))
+    {
+        assert_eq!(r["suite"], *suite);
+        assert_eq!(r["scenarios"], 2);
         // The bundled model and both baselines pack these scenarios.
         assert_eq!(r["sr"]["rate"], 1.0, "{r}");
         assert_eq!(r["decision_us"]["n"].as_u64().map(|n| n > 0), Some(true));
     }
     assert_eq!(rows[0]["reasoner_sr"]["rate"], 1.0);
     assert!(rows[1]["reasoner_sr"].is_null());
+    // Pooled per planner over both suites: every sub-goal of both.
+    let totals = report["totals"].as_array().expect("totals");
+    assert_eq!(totals.len(), 3);
+    for (t, planner) in totals.iter().zip(["learned", "rrt", "expert"]) {
+        assert_eq!(t["suite"], "all suites");
+        assert_eq!(t["planner"], planner);
+        assert_eq!(t["scenarios"], 4);
+        let per_suite: Vec<u64> = rows
+            .iter()
+            .filter(|r| r["planner"] == planner)
+            .filter_map(|r| r["subgoal_us"]["n"].as_u64())
+            .collect();
+        assert_eq!(t["subgoal_us"]["n"].as_u64(), Some(per_suite.iter().sum()));
+    }
     let md = fs::read_to_string(&table).expect("markdown written");
-    assert_eq!(md.lines().count(), 2 + 3, "{md}");
+    assert_eq!(md.lines().count(), 2 + 6 + 3 + 2 + 3, "{md}");
     assert!(
-        md.contains("| m_case1_2of3 | line2 | learned | 3 | 1.000"),
+        md.contains("| m_case1_2of3 | line2 | learned | 2 | 1.000"),
         "{md}"
     );
+    assert!(md.contains("| all suites | - | rrt | 4 | -"), "{md}");
 }
 
 /// The bundled model serves cells it was not taught: `execute` on a

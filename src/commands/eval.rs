@@ -44,7 +44,14 @@ struct EvalReport<'a> {
     seed: u64,
     machine: Machine,
     rows: &'a [Row],
+    /// With more than one suite, one row per planner over every scenario
+    /// of the run (suite `all suites`, cell `-`): the pooled success rates,
+    /// planning times and execution times.
+    totals: &'a [Row],
 }
+
+/// The suite name of the pooled rows ([`EvalReport::totals`]).
+const ALL_SUITES: &str = "all suites";
 
 pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
     super::execute::can_record(args.record.as_deref())?;
@@ -89,6 +96,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
     // anything runs: measuring only the baselines would answer another
     // question than the one asked.
     let (_, learned) = choose_planner(Some(PlannerKind::Learned), args.model.as_deref())?;
+    let several = suites.len() > 1;
     for suite in suites {
         let Some(first) = suite.cases.first() else {
             continue;
@@ -189,7 +197,27 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
             dir.display()
         );
     }
-    let table = markdown(&rows);
+    // Pooled over the run: a percentile from thousands of sub-goals
+    // rather than a suite's hundreds.
+    let totals: Vec<Row> = if several {
+        let mut planners: Vec<PlannerKind> = Vec::new();
+        for r in &rows {
+            if !planners.contains(&r.planner) {
+                planners.push(r.planner);
+            }
+        }
+        planners
+            .iter()
+            .map(|&p| Row::of(ALL_SUITES, "-", None, p, None, &all_results))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let mut table = markdown(&rows);
+    if !totals.is_empty() {
+        table.push_str("\nOver every suite of the run:\n\n");
+        table.push_str(&markdown(&totals));
+    }
     if let Some(dir) = &args.plots {
         write_plots(dir, &rows, &all_results)?;
     }
@@ -209,6 +237,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
             seed: args.seed,
             machine,
             rows: &rows,
+            totals: &totals,
         };
         outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
