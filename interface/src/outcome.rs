@@ -527,15 +527,39 @@ impl Timing {
 }
 
 /// The result of packing one order.
+/// A product the run never picked that ended more than
+/// [`SUCCESS_RADIUS`] from where it stood when the run began: knocked
+/// over or pushed (a contact too light for the world to count as a
+/// collision can still tip a tall product).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Disturbance {
+    pub product: String,
+    /// How far its centre moved (m).
+    pub moved_m: f64,
+}
+
+impl fmt::Display for Disturbance {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "`{}`, never picked, moved {:.0} mm from where it stood",
+            self.product,
+            self.moved_m * 1000.0
+        )
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Report {
     pub planner: PlannerKind,
     pub products: Vec<ProductReport>,
-    /// Every present selected product is packed, nothing collided and no
-    /// decision broke the order.
+    /// Every present selected product is packed, nothing collided,
+    /// nothing was disturbed and no decision broke the order.
     pub complete: bool,
     /// Contacts the world reported.
     pub collisions: Vec<Contact>,
+    /// Products never picked that ended away from where they stood.
+    pub disturbed: Vec<Disturbance>,
     /// Simulated (or real) seconds at the end.
     pub time_s: f64,
     /// Learned planner: stages handed to RRT-Connect, and why.
@@ -553,16 +577,27 @@ pub struct Report {
 impl Report {
     /// The first reason the package is not complete, for people.
     pub fn first_problem(&self) -> Option<String> {
-        let failed = self.products.iter().find_map(|p| match &p.outcome {
-            Outcome::Failed(why) => Some(format!("{}: {why}", p.product)),
-            Outcome::NotAttempted => Some(format!("{}: not attempted", p.product)),
-            _ => None,
-        });
+        // The product that failed, wherever it is in the rows (in
+        // inventory order, the ones it left unattempted may come first).
+        let failed = self
+            .products
+            .iter()
+            .find_map(|p| match &p.outcome {
+                Outcome::Failed(why) => Some(format!("{}: {why}", p.product)),
+                _ => None,
+            })
+            .or_else(|| {
+                self.products
+                    .iter()
+                    .find(|p| p.outcome == Outcome::NotAttempted)
+                    .map(|p| format!("{}: not attempted", p.product))
+            });
         self.violations
             .first()
             .map(|v| format!("the reasoner {v}"))
             .or(failed)
             .or_else(|| self.collisions.first().map(|c| format!("collision: {c}")))
+            .or_else(|| self.disturbed.first().map(|d| format!("disturbed: {d}")))
     }
 }
 
@@ -580,5 +615,54 @@ impl Serialize for Contact {
         st.serialize_field("a", &self.a)?;
         st.serialize_field("b", &self.b)?;
         st.end()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(product: &str, outcome: Outcome) -> ProductReport {
+        ProductReport {
+            product: product.into(),
+            slot: "s".into(),
+            planning_s: 0.0,
+            execution_s: 0.0,
+            bound_s: 0.0,
+            error_m: None,
+            outcome,
+        }
+    }
+
+    /// A package stopped by its third product leaves the second, earlier in
+    /// inventory order, unattempted: the failure is the reason given.
+    #[test]
+    fn the_first_problem_is_the_failure_not_what_it_left_unattempted() {
+        let report = Report {
+            planner: PlannerKind::Learned,
+            products: vec![
+                row("jam", Outcome::Packed),
+                row("syrup", Outcome::NotAttempted),
+                row("tray", Outcome::Failed(Failure::MovedLater)),
+            ],
+            complete: false,
+            collisions: Vec::new(),
+            disturbed: Vec::new(),
+            time_s: 1.0,
+            fallbacks: Vec::new(),
+            violations: Vec::new(),
+            timing: Timing::default(),
+            subgoals: Vec::new(),
+        };
+        let problem = report.first_problem().expect("a problem");
+        assert!(problem.starts_with("tray: "), "{problem}");
+        let stopped = Report {
+            products: vec![row("syrup", Outcome::NotAttempted)],
+            ..report
+        };
+        assert_eq!(
+            stopped.first_problem().as_deref(),
+            Some("syrup: not attempted")
+        );
     }
 }

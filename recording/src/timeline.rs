@@ -228,6 +228,7 @@ mod tests {
             products: Vec::new(),
             complete: true,
             collisions: Vec::new(),
+            disturbed: Vec::new(),
             time_s: 9.0,
             fallbacks: vec![
                 fallback("tea", Stage::Placing, 2),

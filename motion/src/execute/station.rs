@@ -15,9 +15,9 @@ use crate::rrt::{self, Query, RrtConfig};
 use crate::smoothing::lower_bound;
 use nalgebra::{Isometry3, Point3};
 use packwright_interface::outcome::{
-    Budget, Failure, Hit, PlannerKind, ProductReport, Report, Timing,
+    Budget, Disturbance, Failure, Hit, Outcome, PlannerKind, ProductReport, Report, Timing,
 };
-use packwright_interface::world::{Contact, Observation, World};
+use packwright_interface::world::{Contact, Observation, Seen, World};
 use packwright_interface::{CellScene, OrderTask};
 use packwright_kinematics::{Arm, DOF, Joints, joint_distance, tool_down_pose};
 use std::f64::consts::FRAC_PI_2;
@@ -221,6 +221,9 @@ pub(crate) struct Station<'a, W: World> {
     pub deadline: Option<Instant>,
     /// The way back up from the last release, checked but not sent yet.
     backup: Option<Backup>,
+    /// The products where they stood when the station began: a product
+    /// the run never picks must end there (`Report::disturbed`).
+    standing: Vec<Seen>,
 }
 
 /// The way back up from a release, planned and checked right after it but
@@ -244,7 +247,9 @@ struct Backup {
 impl<'a, W: World> Station<'a, W> {
     pub fn new(world: &'a mut W, arm: &'a Arm, task: &'a OrderTask) -> Station<'a, W> {
         let [x, y, z] = task.cell.base;
+        let standing = world.observe().products;
         Station {
+            standing,
             checker: Checker::new(arm, &task.cell),
             world,
             arm,
@@ -818,6 +823,34 @@ impl<'a, W: World> Station<'a, W> {
             .map(|(c, _)| distance(c, self.task.goal(p, s)))
     }
 
+    /// The products seen at `last` that the run never picked (not selected,
+    /// or not attempted: `products` are the report rows, in assignment
+    /// order) and that are more than [`SUCCESS_RADIUS`] from where they
+    /// stood when the station began.
+    fn disturbed(&self, last: &Observation, products: &[ProductReport]) -> Vec<Disturbance> {
+        let handled = |name: &str| {
+            self.task
+                .assignment
+                .iter()
+                .zip(products)
+                .any(|(&(p, _), row)| {
+                    self.task.products[p].name == name && row.outcome != Outcome::NotAttempted
+                })
+        };
+        self.standing
+            .iter()
+            .filter(|seen| !handled(&seen.name))
+            .filter_map(|seen| {
+                let (now, _) = last.find(&seen.name)?;
+                let moved_m = distance(now, seen.centre);
+                (moved_m > SUCCESS_RADIUS).then(|| Disturbance {
+                    product: seen.name.clone(),
+                    moved_m,
+                })
+            })
+            .collect()
+    }
+
     /// The report once the arm has stopped: products knocked out of place
     /// later count as failed too.
     pub fn finish(
@@ -837,12 +870,16 @@ impl<'a, W: World> Station<'a, W> {
                 }
             }
         }
-        let complete = products.iter().all(|r| r.outcome.in_slot()) && collisions.is_empty();
+        let disturbed = self.disturbed(&last, &products);
+        let complete = products.iter().all(|r| r.outcome.in_slot())
+            && collisions.is_empty()
+            && disturbed.is_empty();
         Report {
             planner,
             products,
             complete,
             collisions,
+            disturbed,
             time_s: last.time,
             fallbacks: Vec::new(),
             violations: Vec::new(),

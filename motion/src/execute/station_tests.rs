@@ -1,6 +1,7 @@
 //! `Station::send_legs` against the simulator.
 
 use super::*;
+use packwright_interface::scene::ProductSpec;
 use packwright_interface::world::WorldError;
 use packwright_sim::Simulator;
 
@@ -368,4 +369,92 @@ fn a_carried_product_grazing_a_neighbour_between_full_checks_is_found() {
         );
     }
     assert!(tried >= 8, "{tried} grazing motions with both ends free");
+}
+
+/// A world that is nowhere but where it says its products are: each
+/// observation shows `products`, which the test moves.
+struct Shown {
+    products: Vec<Seen>,
+}
+
+impl World for Shown {
+    fn control_period(&self) -> f64 {
+        0.002
+    }
+    fn observe(&self) -> Observation {
+        Observation {
+            time: 0.0,
+            joints: [0.0; DOF],
+            suction: false,
+            products: self.products.clone(),
+        }
+    }
+    fn command(&mut self, _: &Joints) -> Result<(), WorldError> {
+        Ok(())
+    }
+    fn set_suction(&mut self, _: bool) -> Result<(), WorldError> {
+        Ok(())
+    }
+    fn step(&mut self) -> Result<(), WorldError> {
+        Ok(())
+    }
+    fn take_collisions(&mut self) -> Vec<Contact> {
+        Vec::new()
+    }
+}
+
+/// A product the run never picked that ends more than the success radius
+/// from where it stood (knocked over by a touch the world did not count)
+/// is reported and the package is not complete; one nudged less is not,
+/// nor one the run handled (its own outcome says what became of it).
+#[test]
+fn a_product_never_picked_that_moved_is_reported_as_disturbed() {
+    let arm = Arm::ur10();
+    let product = |name: &str| ProductSpec {
+        name: name.into(),
+        size: [0.05; 3],
+        mass: 0.2,
+    };
+    let task = OrderTask {
+        cell: common::bench_cell(),
+        products: ["picked", "unattempted", "unselected", "nudged"]
+            .map(product)
+            .to_vec(),
+        assignment: vec![(0, 0), (1, 1)],
+    };
+    let seen = |name: &str, x: f64| Seen {
+        name: name.into(),
+        centre: [x, -0.3, 0.025],
+        yaw: 0.0,
+    };
+    let standing = vec![
+        seen("picked", 0.5),
+        seen("unattempted", 0.6),
+        seen("unselected", 0.7),
+        seen("nudged", 0.8),
+    ];
+    let mut world = Shown {
+        products: standing.clone(),
+    };
+    let mut station = Station::new(&mut world, &arm, &task);
+    let mut rows = vec![station.row(0, 0), station.row(1, 1)];
+    rows[0].outcome = Outcome::Failed(Failure::MovedLater);
+    station.world.products = vec![
+        seen("picked", 0.3),
+        seen("unattempted", 0.63),
+        seen("unselected", 0.75),
+        seen("nudged", 0.81),
+    ];
+    let report = station.finish(PlannerKind::Expert, rows, Vec::new());
+    let moved: Vec<(&str, i64)> = report
+        .disturbed
+        .iter()
+        .map(|d| (d.product.as_str(), (d.moved_m * 1000.0).round() as i64))
+        .collect();
+    assert_eq!(moved, [("unattempted", 30), ("unselected", 50)]);
+    assert!(!report.complete);
+    assert_eq!(
+        report.disturbed[1].to_string(),
+        "`unselected`, never picked, moved 50 mm from where it stood"
+    );
 }
