@@ -154,8 +154,42 @@ fn write_synced(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Replaces `path` with `bytes` atomically.
+/// Replaces `path` with `bytes` atomically. A symbolic link is followed:
+/// the file it points to is replaced and the link kept. A path that is
+/// not a regular file (a device such as `/dev/null`, a pipe, a terminal)
+/// is written to as it is: renaming a file over it would destroy it.
 pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let followed;
+    let path = match fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => {
+            let target = fs::read_link(path)
+                .with_context(|| format!("cannot read the link {}", path.display()))?;
+            followed = match path.parent() {
+                Some(parent) if target.is_relative() => parent.join(target),
+                _ => target,
+            };
+            // A link to a link: followed again (the kernel refuses a loop).
+            if fs::symlink_metadata(&followed).is_ok_and(|m| m.file_type().is_symlink()) {
+                return write_file_atomically(&followed, bytes);
+            }
+            followed.as_path()
+        }
+        _ => path,
+    };
+    if let Ok(m) = fs::metadata(path) {
+        if m.is_dir() {
+            bail!("{} is a directory, not a file", path.display());
+        }
+        if !m.is_file() {
+            let mut f = fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .with_context(|| format!("cannot open {}", path.display()))?;
+            return f
+                .write_all(bytes)
+                .with_context(|| format!("cannot write {}", path.display()));
+        }
+    }
     remove_stale_siblings(path);
     let tmp = sibling(path, "tmp");
     write_synced(&tmp, bytes)?;
@@ -303,6 +337,56 @@ pub fn write_dir_atomically(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Output to a pipe (as to `/dev/null`, a device) goes through it and
+    /// leaves it a pipe: a file renamed over it replaced `/dev/null` for
+    /// `draw -o /dev/null`, run as root. Output to a symbolic link replaces
+    /// the file it points to and keeps the link; a directory is refused.
+    #[test]
+    fn output_to_a_pipe_or_a_link_keeps_it_what_it_is() {
+        use std::os::unix::fs::FileTypeExt;
+        let dir = scratch("special");
+        let fifo = dir.join("pipe");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || fs::read(&fifo).expect("read the pipe"))
+        };
+        write_file_atomically(&fifo, b"through").expect("written to the pipe");
+        // Before joining the reader, which a replaced pipe would leave
+        // waiting for a writer.
+        let kind = fs::symlink_metadata(&fifo)
+            .expect("still there")
+            .file_type();
+        assert!(kind.is_fifo(), "{kind:?}");
+        assert_eq!(reader.join().expect("reader"), b"through");
+
+        let target = dir.join("target.svg");
+        fs::write(&target, "old").expect("target");
+        let link = dir.join("link.svg");
+        std::os::unix::fs::symlink("target.svg", &link).expect("link");
+        write_file_atomically(&link, b"new").expect("written through the link");
+        assert!(
+            fs::symlink_metadata(&link)
+                .expect("link")
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(fs::read_to_string(&target).expect("target"), "new");
+
+        let dangling = dir.join("dangling.svg");
+        std::os::unix::fs::symlink("made.svg", &dangling).expect("link");
+        write_file_atomically(&dangling, b"made").expect("written through the link");
+        assert_eq!(
+            fs::read_to_string(dir.join("made.svg")).expect("made"),
+            "made"
+        );
+
+        let err = write_file_atomically(&dir, b"x").expect_err("a directory");
+        assert!(err.to_string().contains("is a directory"), "{err}");
+        let _ = fs::remove_dir_all(&dir);
+    }
 
     fn scratch(name: &str) -> PathBuf {
         let dir =
