@@ -278,6 +278,11 @@ fn within_workspace(
 /// How to write a length that must be above zero.
 const POSITIVE_LENGTH: &str = "write a positive length";
 
+/// The lightest product mass, kilograms: the simulator's lightest body.
+pub const MIN_MASS: f64 = 0.001;
+/// The heaviest product mass, kilograms: the UR10's rated payload.
+pub const MAX_MASS: f64 = 10.0;
+
 impl Resolver<'_> {
     /// Whether `value` is above zero; else an error saying that `what`
     /// must be, and how to write it (`fix`).
@@ -289,6 +294,26 @@ impl Resolver<'_> {
             at,
             what: format!("{what} must be greater than zero"),
             fix: fix.into(),
+        });
+        false
+    }
+
+    /// Whether a product's mass `kg` is one the robot world handles: from
+    /// [`MIN_MASS`] (the simulator's lightest) to [`MAX_MASS`] (the UR10's
+    /// rated payload); else an error saying so.
+    fn mass_in_range(&mut self, kg: f64, at: Loc) -> bool {
+        if (MIN_MASS..=MAX_MASS).contains(&kg) {
+            return true;
+        }
+        let what = if kg < MIN_MASS {
+            "a mass must be at least 1 g"
+        } else {
+            "a mass must be at most 10 kg"
+        };
+        self.errors.push(Error::BadGeometry {
+            at,
+            what: what.into(),
+            fix: "write a mass from 0.001 (1 g) to 10 kg: the simulator models products from 1 g, and a UR10 carries at most 10 kg (its rated payload)".into(),
         });
         false
     }
@@ -668,12 +693,12 @@ impl Resolver<'_> {
             return;
         }
         if let Some(m) = &p.mass
-            && !self.positive(
+            && !(self.positive(
                 m.kg,
                 Loc::new(f, m.span),
                 "a mass",
                 "write the mass in kilograms, above zero (`mass 0.3`)",
-            )
+            ) && self.mass_in_range(m.kg, Loc::new(f, m.span)))
         {
             return;
         }
