@@ -133,11 +133,13 @@ pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
             .filter(|i| i.cell == c)
             .map(|i| &i.name)
             .collect();
-        if !invs.is_empty() {
-            errln!(
+        match invs.as_slice() {
+            [] => {}
+            [one] => errln!("note: --inventory {one} draws its products too"),
+            _ => errln!(
                 "note: --inventory NAME draws the products of one of {}",
                 names(invs.into_iter())
-            );
+            ),
         }
     }
     let svg = packwright_draw::picture(&picture)?;
