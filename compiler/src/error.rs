@@ -12,6 +12,11 @@ use thiserror::Error;
 /// which lists products, one is a product unknown by that name.
 const SEQUENCE_RULES: [&str; 4] = ["ascending", "descending", "listed", "random"];
 
+/// A top face this low (m) that the cup cannot reach is out of reach
+/// because of the table, not of the arm: the planner keeps the cup's body
+/// 5 mm clear of everything but the product it picks, and its body ends
+/// short of the tip ([`Error::help`]).
+const THIN_TOP_FACE: f64 = 0.005;
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum Error {
     #[error("cannot read `{}`: {reason}", path.display())]
@@ -491,6 +496,7 @@ impl Error {
             Error::OutOfReach { min, max, .. } => format!("the UR10 reaches between {min:.2} m and {max:.2} m from its base axis; move it or the `base`"),
             Error::FarFromBase { max, .. } => format!("check the number and its unit: lengths and positions are metres unless they carry `mm` or `cm` (`0.65`, `650 mm`); every pending area and box lies within {max} m of the cell's `base`"),
             Error::Unreachable { pose: Pose::Start, .. } => "the arm starts with its cup 0.35 m over the middle of the `pending` area: bring the area nearer the robot's base (or the `base` nearer the area)".into(),
+            Error::Unreachable { pose: Pose::TopFace, tip, .. } if tip[2] <= THIN_TOP_FACE => format!("the top face is {:.0} mm above the table, and the cup is kept a few millimetres clear of everything but the product it picks: it would meet the table, wherever the product stands. Check the product's height; one thinner than {:.0} mm cannot be picked by this cup", tip[2] * 1000.0, THIN_TOP_FACE * 1000.0 + 1.0),
             Error::Unreachable { pose, .. } if pose.is_picking() => "move the product nearer the robot's base (or the `base` nearer the products), or lower the cell's `lift`; the cup (`suction`) reaches down from the wrist, so a shorter cup reaches further".into(),
             Error::Unreachable { pose: Pose::Approach, .. } => "the robot carries the product round its base axis, at the lift's height or clear of the box's rim if that is higher, half-way between the product and the slot: bring the product and the slot nearer each other, lower the cell's `lift`, or use a lower box".into(),
             Error::Unreachable { .. } => "move the slot (or its box) nearer the robot's base, or use a lower box: the product is held above the rim before it goes down".into(),
