@@ -138,7 +138,14 @@ impl fmt::Display for Hit {
 #[serde(rename_all = "snake_case", tag = "kind")]
 pub enum Failure {
     /// No collision-free inverse-kinematics solution puts the cup there.
-    Unreachable { subgoal: usize, tip: [f64; 3] },
+    Unreachable {
+        subgoal: usize,
+        tip: [f64; 3],
+        /// What the arm pose nearest the arm's meets there, when the cup
+        /// can be put there at all (every pose that does collides).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        met: Option<Hit>,
+    },
     /// RRT-Connect found no path to the sub-goal.
     NoPath { subgoal: usize },
     /// The sub-goal planner gave a sub-goal that is not a finite point.
@@ -186,11 +193,17 @@ impl From<WorldError> for Failure {
 impl fmt::Display for Failure {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Failure::Unreachable { subgoal, tip } => write!(
-                f,
-                "sub-goal {subgoal} at ({:.3}, {:.3}, {:.3}) is unreachable",
-                tip[0], tip[1], tip[2]
-            ),
+            Failure::Unreachable { subgoal, tip, met } => {
+                write!(
+                    f,
+                    "sub-goal {subgoal} at ({:.3}, {:.3}, {:.3}) is unreachable",
+                    tip[0], tip[1], tip[2]
+                )?;
+                match met {
+                    Some(hit) => write!(f, ": every arm pose there collides ({hit})"),
+                    None => Ok(()),
+                }
+            }
             Failure::NoPath { subgoal } => {
                 write!(f, "RRT-Connect found no path to sub-goal {subgoal}")
             }

@@ -435,9 +435,19 @@ impl<'a, W: World> Station<'a, W> {
                     })
                     .flatten()
             })
-            .ok_or(Failure::Unreachable {
-                subgoal: k,
-                tip: goal.tip,
+            .ok_or_else(|| {
+                // Where the cup can be put there but every arm pose
+                // collides, what the nearest meets: a carried product over
+                // a tall one is no matter of reach.
+                let tip = Point3::new(goal.tip[0], goal.tip[1], goal.tip[2]);
+                let met = solutions(&self.checker, tip, yaw, from)
+                    .first()
+                    .and_then(|q| self.checker.check(q, load.held, load.ignore));
+                Failure::Unreachable {
+                    subgoal: k,
+                    tip: goal.tip,
+                    met,
+                }
             })
     }
 

@@ -2,7 +2,7 @@
 
 use super::*;
 use packwright_interface::scene::ProductSpec;
-use packwright_interface::world::WorldError;
+use packwright_interface::world::{Body, WorldError};
 use packwright_sim::Simulator;
 
 // The bench cell the crate's integration tests use.
@@ -456,5 +456,49 @@ fn a_product_never_picked_that_moved_is_reported_as_disturbed() {
     assert_eq!(
         report.disturbed[1].to_string(),
         "`unselected`, never picked, moved 50 mm from where it stood"
+    );
+}
+
+/// A sub-goal whose every arm pose collides (a carried product over a
+/// tall one standing there) is unreachable, and says what the nearest
+/// pose meets: the carried product, not the arm's reach.
+#[test]
+fn an_unreachable_sub_goal_says_what_its_nearest_pose_meets() {
+    let arm = Arm::ur10();
+    let (task, start, mut world) = empty_bench_cell(&arm);
+    let mut station = Station::new(&mut world, &arm, &task);
+    station.checker.set_products(&[ProductBody {
+        name: "bottle".into(),
+        centre: [0.6, -0.3, 0.11],
+        size: [0.06, 0.06, 0.22],
+        yaw: 0.0,
+    }]);
+    let syrup = Held::under_cup(
+        "syrup",
+        [0.045, 0.045, 0.18],
+        task.cell.suction,
+        nalgebra::Vector3::zeros(),
+    );
+    let goal = SubGoal {
+        tip: [0.6, -0.3, 0.33],
+        suction: Suction::Keep,
+    };
+    let failed = station.solve(&goal, 1, &start, 0.0, Load::holding(&syrup), 0.33);
+    let Err(Failure::Unreachable { met: Some(hit), .. }) = failed else {
+        panic!("unreachable with what it meets: {failed:?}");
+    };
+    assert_eq!(
+        hit,
+        Hit::Bodies {
+            a: Body::Held("syrup".into()),
+            b: Body::Product("bottle".into()),
+        }
+    );
+    // With nothing in the way, the same sub-goal is reached.
+    station.checker.set_products(&[]);
+    assert!(
+        station
+            .solve(&goal, 1, &start, 0.0, Load::holding(&syrup), 0.33)
+            .is_ok()
     );
 }
