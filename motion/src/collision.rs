@@ -1195,16 +1195,14 @@ mod tests {
             // The cube beside the product half way, in a random direction
             // across, from touching its side to a centimetre off its
             // corner.
-            let mid = padded.arm.link_poses(&padded.base, &lerp(&q0, &q1, 0.5))[DOF]
-                * padded.arm.flange
-                * held.in_flange;
+            let mid = centre_of(&padded, &lerp(&q0, &q1, 0.5), &held);
             let heading = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
             let (near, far) = (
                 size[0].max(size[1]) / 2.0 + 0.015,
                 size[0].hypot(size[1]) / 2.0 + 0.045,
             );
             let off = rng.random_range(near..far);
-            let centre = mid.translation.vector
+            let centre = mid
                 + Vector3::new(
                     heading.cos() * off,
                     heading.sin() * off,
@@ -1258,6 +1256,30 @@ mod tests {
         );
     }
 
+    /// The centre of `held` at `q` (world, m).
+    fn centre_of(checker: &Checker, q: &Joints, held: &Held) -> Vector3<f64> {
+        (checker.arm.link_poses(&checker.base, q)[DOF] * checker.arm.flange * held.in_flange)
+            .translation
+            .vector
+    }
+
+    /// `held`'s boxes at `q0` and `q1`, each free, and the hull of the two
+    /// missing everything too: a sweep that finds something between them
+    /// finds what a check of the ends alone would miss.
+    fn free_ends(checker: &Checker, q0: &Joints, q1: &Joints, held: &Held) -> (HeldPose, HeldPose) {
+        let (a, b) = (
+            checker
+                .held_posed(q0, held, None)
+                .expect("the start is free"),
+            checker.held_posed(q1, held, None).expect("the end is free"),
+        );
+        assert!(
+            checker.hull_meets_obstacles(&a, &b, held, None).is_none(),
+            "the ends' hull meets something: a weak test"
+        );
+        (a, b)
+    }
+
     /// A 40 degree turn of the base carries the vase along an arc that
     /// bows 5 cm out of the chord between its ends; a cube on the arc's
     /// outside, 3.5 cm out, meets the vase half way while the hull of the
@@ -1277,12 +1299,7 @@ mod tests {
             q[0] += 0.7 * t;
             q
         };
-        let centre = |q: &Joints| {
-            (checker.arm.link_poses(&checker.base, q)[DOF] * checker.arm.flange * vase.in_flange)
-                .translation
-                .vector
-        };
-        let mid = centre(&turned(0.5));
+        let mid = centre_of(&checker, &turned(0.5), &vase);
         let base = Vector3::new(cell.base[0], cell.base[1], mid.z);
         let out = (mid - base).normalize() * 0.035;
         checker.set_products(&[ProductBody {
@@ -1292,18 +1309,7 @@ mod tests {
             yaw: 0.0,
         }]);
         let q1 = turned(1.0);
-        let (a, b) = (
-            checker
-                .held_posed(&q0, &vase, None)
-                .expect("the start is free"),
-            checker
-                .held_posed(&q1, &vase, None)
-                .expect("the end is free"),
-        );
-        assert!(
-            checker.hull_meets_obstacles(&a, &b, &vase, None).is_none(),
-            "the ends' hull meets the cube: a weak test"
-        );
+        let (a, b) = free_ends(&checker, &q0, &q1, &vase);
         assert!(checker.held_posed(&turned(0.5), &vase, None).is_err());
         assert!(checker.sweep(&q0, &a, &q1, &b, &[], &vase, None).is_some());
         let commands: Vec<Joints> = (1..40).map(|i| turned(f64::from(i) / 40.0)).collect();
@@ -1329,29 +1335,14 @@ mod tests {
         let (q0, q1) = (along(0.0), along(0.2 * MAX_STEP));
         let mut strayed = along(0.1 * MAX_STEP);
         strayed[1] -= 8.0 * MAX_STEP;
-        let at = (checker.arm.link_poses(&checker.base, &strayed)[DOF]
-            * checker.arm.flange
-            * vase.in_flange)
-            .translation
-            .vector;
+        let at = centre_of(&checker, &strayed, &vase);
         checker.set_products(&[ProductBody {
             name: "cube".into(),
             centre: at.into(),
             size: [0.01; 3],
             yaw: 0.0,
         }]);
-        let (a, b) = (
-            checker
-                .held_posed(&q0, &vase, None)
-                .expect("the start is free"),
-            checker
-                .held_posed(&q1, &vase, None)
-                .expect("the end is free"),
-        );
-        assert!(
-            checker.hull_meets_obstacles(&a, &b, &vase, None).is_none(),
-            "the ends' hull meets the cube: a weak test"
-        );
+        let (a, b) = free_ends(&checker, &q0, &q1, &vase);
         assert!(checker.sweep(&q0, &a, &q1, &b, &[], &vase, None).is_none());
         // Commands 2 ms apart bulging out to the strayed one and back.
         let commands: Vec<Joints> = (1..40)
