@@ -69,8 +69,9 @@ const MIN_SWEEP_SLACK: f64 = 0.0003;
 const MAX_SWEEP_SPLITS: usize = 32;
 
 /// How far, per radian of each joint, the points of a held product move
-/// at a configuration (m/rad): the distance from each joint's axis to the
-/// farthest corner of its padded box ([`Checker::lever_arms`]).
+/// at a configuration (m/rad), at most: the distance from each joint's
+/// axis to the centre of its padded box plus half the box's diagonal
+/// ([`HeldPose::levers`]).
 pub type LeverArms = [f64; DOF];
 
 /// A bound on how far the held product moves from `a` to `b` along the
@@ -534,11 +535,7 @@ impl Checker {
         let Some(h) = held else {
             return Ok(None);
         };
-        // The flange from the same links (the same arithmetic as
-        // `Arm::flange_pose`).
-        let flange = links[DOF] * self.arm.flange;
-        let (hp, cuboid) = h.padded_box(&flange, self.held_padding);
-        let aabb = cuboid.compute_aabb(&hp);
+        let (hp, cuboid, aabb) = self.held_box(links, h);
         if let Some(hit) = self.held_meets_obstacles(h, (&hp, &cuboid, &aabb), ignore) {
             return Err(hit);
         }
@@ -589,15 +586,24 @@ impl Checker {
             })
     }
 
+    /// The held product's padded box at the link poses `links`: its pose,
+    /// shape and bounding box.
+    fn held_box(&self, links: &[Isometry3<f64>; DOF + 1], held: &Held) -> (Pose, Cuboid, Aabb) {
+        // The flange from the same links (the same arithmetic as
+        // `Arm::flange_pose`).
+        let flange = links[DOF] * self.arm.flange;
+        let (pose, cuboid) = held.padded_box(&flange, self.held_padding);
+        (pose, cuboid, cuboid.compute_aabb(&pose))
+    }
+
     /// The held product's box and lever arms at `q`, unchecked.
     pub fn held_pose(&self, q: &Joints, held: &Held) -> HeldPose {
         let links = self.arm.link_poses(&self.base, q);
-        let flange = links[DOF] * self.arm.flange;
-        let (pose, cuboid) = held.padded_box(&flange, self.held_padding);
+        let (pose, cuboid, aabb) = self.held_box(&links, held);
         HeldPose {
             pose,
             cuboid,
-            aabb: cuboid.compute_aabb(&pose),
+            aabb,
             levers: self.levers_at(&links, held),
         }
     }
@@ -774,22 +780,7 @@ impl Checker {
             })
     }
 
-    /// How far the points of `held` move per radian of each joint at `q`,
-    /// at most: the distance from each joint's axis to the centre of the
-    /// held product's padded box, plus half its diagonal (as far as its
-    /// farthest corner can be). Zero for every joint when nothing is held
-    /// or `q` is not finite.
-    pub fn lever_arms(&self, q: &Joints, held: Option<&Held>) -> LeverArms {
-        let Some(held) = held else {
-            return [0.0; DOF];
-        };
-        if q.iter().any(|v| !v.is_finite()) {
-            return [0.0; DOF];
-        }
-        self.levers_at(&self.arm.link_poses(&self.base, q), held)
-    }
-
-    /// [`Checker::lever_arms`] at the link poses `links`.
+    /// The lever arms ([`LeverArms`]) of `held` at the link poses `links`.
     fn levers_at(&self, links: &[Isometry3<f64>; DOF + 1], held: &Held) -> LeverArms {
         let centre = (links[DOF] * self.arm.flange * held.in_flange)
             .translation

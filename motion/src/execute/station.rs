@@ -1187,8 +1187,8 @@ fn first_collision<'h>(
         let leg = motion.leg_at(i);
         let last_one = i + 1 == samples.len();
         let changes = !last_one && motion.leg_at(i + 1) != leg;
-        let far = samples.get(i + 1).is_none_or(|next| done.far(next));
-        if !(last_one || changes || far) {
+        let next_far = samples.get(i + 1).is_none_or(|next| done.far(next));
+        if !(last_one || changes || next_far) {
             continue;
         }
         let load = load_of(leg);
@@ -1210,8 +1210,8 @@ fn first_collision<'h>(
         // The held product from the last full check to this one, through
         // the commands between.
         let between = &samples[done.from..i];
-        if let (Some(held), Some(from), Some(to), false) =
-            (load.held, &done.held, &at, far && between.is_empty())
+        if !(far && between.is_empty())
+            && let (Some(held), Some(from), Some(to)) = (load.held, &done.held, &at)
         {
             let ignore = if motion.shaped_within(done.from..i + 1) {
                 None
