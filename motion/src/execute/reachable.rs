@@ -1,8 +1,9 @@
 //! Whether the expert can reach every pose of a pick and place before
 //! anything moves: the same sub-goals ([`expert::picking`],
 //! [`expert::placing`]), the same inverse kinematics and collision check
-//! against the cell's fixtures, the same raised release
-//! ([`Station::solve`](super::station::Station::solve)) as `execute`, and
+//! against the cell's fixtures, the same raised release and carrying
+//! points ([`Station::solve`](super::station::Station::solve)) as
+//! `execute`, and
 //! the straight moves between them (the descent to the top face, the lift
 //! carrying the product, lowered where it must be, the descent into the
 //! slot). What it does not know: the carrying motions (lift to approach
@@ -11,7 +12,9 @@
 //! ([`Reachability::among`]: then the same questions tell what they block,
 //! a start pose or a pick the empty cell allows).
 
-use super::station::{Load, MAX_RAISES, MIN_LIFT, RAISE_STEP, READY, home_on, home_tip, solutions};
+use super::station::{
+    Load, MAX_CARRY_RAISES, MAX_RAISES, MIN_LIFT, RAISE_STEP, READY, home_on, home_tip, solutions,
+};
 use crate::collision::{Checker, Held, ProductBody};
 use crate::expert::{self, SubGoal};
 use nalgebra::{Point3, Vector3};
@@ -199,11 +202,18 @@ impl Reachability {
             .map(|i| goals[2].tip[2] + RAISE_STEP * f64::from(i))
             .take_while(|z| *z <= ceiling)
             .collect();
+        // The approach and the point above the slot are raised where every
+        // arm pose collides, as `Station::solve` raises them.
+        let carried = |goal: &SubGoal| -> Vec<f64> {
+            (0..=MAX_CARRY_RAISES)
+                .map(|i| goal.tip[2] + RAISE_STEP * f64::from(i))
+                .collect()
+        };
         let mut above = Vec::new();
         for (k, goal) in goals.iter().enumerate() {
             let reached = match k {
                 2 => self.step(goal, &raised, Some(&above), load),
-                _ => self.step(goal, &[goal.tip[2]], None, load),
+                _ => self.step(goal, &carried(goal), None, load),
             };
             if reached.is_empty() {
                 return Err(Unreached {

@@ -32,6 +32,10 @@ pub(crate) const MAX_RAISES: u32 = 100;
 /// The lowest a lift may be lowered to, above where the cup gripped (m):
 /// the cell language's smallest `lift`.
 pub(crate) const MIN_LIFT: f64 = 0.02;
+/// Most raises of a point a held product is carried through (the approach,
+/// above the slot) where every arm pose collides (0.5 m in all): a
+/// product standing taller than the carrying height under the way.
+pub(crate) const MAX_CARRY_RAISES: u32 = 50;
 /// Height of the cup tip in the start pose.
 pub const HOME_HEIGHT: f64 = 0.35;
 
@@ -379,7 +383,12 @@ impl<'a, W: World> Station<'a, W> {
     /// cannot (the arm's shape at full height differs, and the joint
     /// motion to another shape would drag the product), it is lowered
     /// [`RAISE_STEP`] at a time down to [`MIN_LIFT`] above where the cup
-    /// gripped. The straight motion checked for a release or a lift is
+    /// gripped. A point the product is carried through (the approach,
+    /// above the slot) where every arm pose collides is raised
+    /// [`RAISE_STEP`] at a time, at most [`MAX_CARRY_RAISES`] times: a
+    /// product standing taller than the carrying height under the way (a
+    /// bottle beside the pending area, the held product or the wrist
+    /// against it). The straight motion checked for a release or a lift is
     /// kept with the joints ([`Solved`]): routing to them from `from`
     /// ([`Station::route_solved`]) sends it without checking it again.
     pub fn solve(
@@ -395,6 +404,8 @@ impl<'a, W: World> Station<'a, W> {
             return Err(Failure::NonFiniteSubGoal { subgoal: k });
         }
         let lifting = goal.suction == Suction::Keep && load.held.is_some_and(|h| h.leaving_support);
+        let carried =
+            goal.suction == Suction::Keep && load.held.is_some_and(|h| !h.leaving_support);
         let solve = |z: f64| {
             let tip = Point3::new(goal.tip[0], goal.tip[1], z);
             let joints = reach(&self.checker, tip, yaw, from, load)?;
@@ -431,6 +442,15 @@ impl<'a, W: World> Station<'a, W> {
                         (1..=MAX_RAISES)
                             .map(|i| goal.tip[2] - RAISE_STEP * f64::from(i))
                             .take_while(|z| *z >= floor)
+                            .find_map(solve)
+                    })
+                    .flatten()
+            })
+            .or_else(|| {
+                carried
+                    .then(|| {
+                        (1..=MAX_CARRY_RAISES)
+                            .map(|i| goal.tip[2] + RAISE_STEP * f64::from(i))
                             .find_map(solve)
                     })
                     .flatten()

@@ -460,17 +460,20 @@ fn a_product_never_picked_that_moved_is_reported_as_disturbed() {
 }
 
 /// A sub-goal whose every arm pose collides (a carried product over a
-/// tall one standing there) is unreachable, and says what the nearest
-/// pose meets: the carried product, not the arm's reach.
+/// product standing taller than raising it could clear) is unreachable,
+/// and says what the nearest pose meets: the carried product, not the
+/// arm's reach.
 #[test]
 fn an_unreachable_sub_goal_says_what_its_nearest_pose_meets() {
     let arm = Arm::ur10();
     let (task, start, mut world) = empty_bench_cell(&arm);
     let mut station = Station::new(&mut world, &arm, &task);
+    // Its top 0.9 m up: the syrup's bottom, 0.18 m under the tip, stays
+    // below it up to 0.5 m over the sub-goal.
     station.checker.set_products(&[ProductBody {
-        name: "bottle".into(),
-        centre: [0.6, -0.3, 0.11],
-        size: [0.06, 0.06, 0.22],
+        name: "pillar".into(),
+        centre: [0.6, -0.3, 0.45],
+        size: [0.06, 0.06, 0.9],
         yaw: 0.0,
     }]);
     let syrup = Held::under_cup(
@@ -487,12 +490,11 @@ fn an_unreachable_sub_goal_says_what_its_nearest_pose_meets() {
     let Err(Failure::Unreachable { met: Some(hit), .. }) = failed else {
         panic!("unreachable with what it meets: {failed:?}");
     };
-    assert_eq!(
-        hit,
-        Hit::Bodies {
-            a: Body::Held("syrup".into()),
-            b: Body::Product("bottle".into()),
-        }
+    // The nearest pose meets the pillar (with the held syrup or the wrist
+    // above it, whichever the check finds first).
+    assert!(
+        matches!(&hit, Hit::Bodies { b: Body::Product(p), .. } if p == "pillar"),
+        "{hit:?}"
     );
     // With nothing in the way, the same sub-goal is reached.
     station.checker.set_products(&[]);
@@ -501,4 +503,61 @@ fn an_unreachable_sub_goal_says_what_its_nearest_pose_meets() {
             .solve(&goal, 1, &start, 0.0, Load::holding(&syrup), 0.33)
             .is_ok()
     );
+}
+
+/// A point the held product is carried through, over a product standing
+/// taller than the carrying height (a 180 mm syrup over a 220 mm
+/// bottle), is raised until every part clears it; the point above
+/// nothing stays where it was.
+#[test]
+fn a_carried_point_over_a_taller_product_is_raised_until_clear() {
+    let arm = Arm::ur10();
+    let (task, start, mut world) = empty_bench_cell(&arm);
+    let mut station = Station::new(&mut world, &arm, &task);
+    let bottle = ProductBody {
+        name: "bottle".into(),
+        centre: [0.6, -0.3, 0.11],
+        size: [0.06, 0.06, 0.22],
+        yaw: 0.0,
+    };
+    station.checker.set_products(std::slice::from_ref(&bottle));
+    let syrup = Held::under_cup(
+        "syrup",
+        [0.045, 0.045, 0.18],
+        task.cell.suction,
+        nalgebra::Vector3::zeros(),
+    );
+    let load = Load::holding(&syrup);
+    let over = SubGoal {
+        tip: [0.6, -0.3, 0.33],
+        suction: Suction::Keep,
+    };
+    let solved = station
+        .solve(&over, 1, &start, 0.0, load, 0.33)
+        .expect("raised until clear");
+    let tip = station.tip(&solved.joints);
+    assert!((tip[0] - 0.6).hypot(tip[1] + 0.3) < 1e-6, "{tip:?}");
+    // The syrup's bottom over the bottle's top, in whole raise steps.
+    assert!(tip[2] - 0.18 > 0.22, "{tip:?}");
+    assert!(tip[2] < 0.33 + RAISE_STEP * f64::from(MAX_CARRY_RAISES));
+    let steps = (tip[2] - 0.33) / RAISE_STEP;
+    assert!((steps - steps.round()).abs() < 1e-6, "{tip:?}");
+    assert!(
+        station
+            .checker
+            .check(&solved.joints, Some(&syrup), None)
+            .is_none()
+    );
+    // One step lower, every arm pose meets the bottle.
+    let lower = nalgebra::Point3::new(0.6, -0.3, tip[2] - RAISE_STEP);
+    assert!(reach(&station.checker, lower, 0.0, &start, load).is_none());
+    // Beside the bottle, nothing is raised.
+    let beside = SubGoal {
+        tip: [0.6, 0.0, 0.33],
+        suction: Suction::Keep,
+    };
+    let solved = station
+        .solve(&beside, 1, &start, 0.0, load, 0.33)
+        .expect("reached");
+    assert!((station.tip(&solved.joints)[2] - 0.33).abs() < 1e-6);
 }
