@@ -297,6 +297,11 @@ pub enum Shortfall {
     /// horizontally) from where the task needs it: the product's centre
     /// (the grip) or the slot (the release). No motion is tried to it.
     OffTarget { distance_m: f64 },
+    /// A release raised over the expert's (the product drops the rest of
+    /// the way) would drop the product onto its box's wall: it is `by_m`
+    /// (horizontally) from letting go with the product inside the walls,
+    /// more than a learned release is moved.
+    OverWall { by_m: f64 },
 }
 
 impl Shortfall {
@@ -314,6 +319,7 @@ impl Shortfall {
             Shortfall::Smoothing { .. } => "smoothing",
             Shortfall::Collides { .. } => "would collide",
             Shortfall::OffTarget { .. } => "off target",
+            Shortfall::OverWall { .. } => "dropped onto a wall",
         }
     }
 }
@@ -344,6 +350,11 @@ impl fmt::Display for Shortfall {
                 f,
                 "the learned sub-goal is {:.1} mm off the product's centre or the slot",
                 distance_m * 1e3
+            ),
+            Shortfall::OverWall { by_m } => write!(
+                f,
+                "let go above the rim, the product would drop onto the box's wall ({:.1} mm from inside it)",
+                by_m * 1e3
             ),
         }
     }

@@ -9,7 +9,7 @@ use packwright_interface::OrderTask;
 use packwright_interface::Policy;
 use packwright_interface::outcome::{Outcome, Report, Shortfall, Stage, Violation};
 use packwright_interface::record;
-use packwright_interface::scene::{CellScene, Placement, ProductSpec};
+use packwright_interface::scene::{BoxSpec, CellScene, Placement, ProductSpec, SlotSpec};
 use packwright_interface::{Choice, Graph, Node, SequenceRule, SubGoalQuery};
 use packwright_kinematics::{Arm, Joints};
 use packwright_motion::execute::{self, Planner};
@@ -53,8 +53,18 @@ fn episode_in(
     packed: &[&str],
     missing: &[&str],
 ) -> (Arm, OrderTask, Simulator) {
+    episode_of(cell, products(), assign, packed, missing)
+}
+
+/// [`episode_in`] with `inventory`'s products where it puts them.
+fn episode_of(
+    cell: CellScene,
+    inventory: Vec<(ProductSpec, [f64; 2])>,
+    assign: &[(&str, &str)],
+    packed: &[&str],
+    missing: &[&str],
+) -> (Arm, OrderTask, Simulator) {
     let arm = Arm::ur10();
-    let inventory = products();
     let specs: Vec<ProductSpec> = inventory.iter().map(|(s, _)| s.clone()).collect();
     let mut assignment: Vec<(usize, usize)> = assign
         .iter()
@@ -583,6 +593,140 @@ fn a_colliding_release_is_raised_a_little_then_goes_to_the_experts() {
     );
     assert_eq!(f.expert_from, Some(3), "{f}");
     assert!(matches!(f.why, Shortfall::Collides { .. }), "{f}");
+}
+
+/// A release raised over the expert's lets the product drop past the
+/// rim. A 10 mm tray in a slot flush with the wall of a 100 mm box, the
+/// wrist over the wall (every planner lets go well above the floor): a
+/// learned release a few millimetres towards the wall would drop the tray
+/// onto the wall, where it tips off its slot; it is kept inside the walls
+/// and packed, without a fallback, or, where that would move it more than
+/// a learned release is moved, the expert's release is used.
+#[test]
+fn a_release_dropped_over_a_wall_keeps_its_product_inside() {
+    let cell = CellScene {
+        name: "flush".into(),
+        pending: ([0.40, -0.30], [0.85, 0.05]),
+        boxes: vec![BoxSpec {
+            name: "case".into(),
+            centre: [0.60, -0.45],
+            size: [0.32, 0.20, 0.10],
+        }],
+        slots: vec![SlotSpec {
+            name: "h5".into(),
+            position: [0.60, -0.40],
+            box_index: 0,
+        }],
+        ..bench_cell()
+    };
+    let tray = ProductSpec {
+        name: "tray".into(),
+        size: [0.09, 0.09, 0.01],
+        mass: 0.15,
+    };
+    let run = |by: [f64; 3]| {
+        let (arm, task, mut sim) = episode_of(
+            cell.clone(),
+            vec![(tray.clone(), [0.50, -0.07])],
+            &[("tray", "h5")],
+            &[],
+            &[],
+        );
+        let policy = Scripted {
+            release_offset: by,
+            ..Scripted::reaching(task.clone())
+        };
+        run_learned(&mut sim, &arm, &task, &policy)
+    };
+    // The expert's release, and learned ones 1 and 3 mm towards the wall
+    // (dropped onto it: 4 and 34 mm off the slot before they were kept
+    // inside).
+    for by in [0.0, 0.001, 0.003] {
+        let report = run([0.0, by, 0.0]);
+        assert_packed(&report);
+        assert!(report.fallbacks.is_empty(), "{by}: {:#?}", report.fallbacks);
+        let error = report.products[0].error_m.expect("released");
+        assert!(error < 0.005, "{by}: {error}");
+    }
+    // 6 mm: kept inside, it would move more than a learned release is
+    // moved; the expert's release is used.
+    let report = run([0.0, 0.006, 0.0]);
+    assert_packed(&report);
+    let [f] = report.fallbacks.as_slice() else {
+        panic!("one fallback: {:#?}", report.fallbacks);
+    };
+    assert_eq!(
+        (f.stage, f.subgoal, f.expert_from),
+        (Stage::Placing, 3, Some(3)),
+        "{f}"
+    );
+    assert!(matches!(f.why, Shortfall::OverWall { .. }), "{f}");
+}
+
+/// A product carried over one standing taller than the carrying height
+/// (a 180 mm syrup over a 220 mm bottle, lift 150 mm): every planner
+/// raises the approach until the syrup clears the bottle; the learned
+/// planner by its own steps, without a fallback.
+#[test]
+fn a_carry_over_a_taller_product_is_raised_by_every_planner() {
+    let cell = CellScene {
+        name: "bar".into(),
+        pending: ([0.40, -0.30], [0.85, 0.05]),
+        boxes: vec![BoxSpec {
+            name: "case".into(),
+            centre: [0.60, -0.45],
+            size: [0.32, 0.20, 0.10],
+        }],
+        slots: vec![SlotSpec {
+            name: "h3".into(),
+            position: [0.70, -0.50],
+            box_index: 0,
+        }],
+        ..bench_cell()
+    };
+    let product = |name: &str, size: [f64; 3], at: [f64; 2]| {
+        (
+            ProductSpec {
+                name: name.into(),
+                size,
+                mass: 0.5,
+            },
+            at,
+        )
+    };
+    let episode = || {
+        episode_of(
+            cell.clone(),
+            vec![
+                product("bottle", [0.06, 0.06, 0.22], [0.77, -0.26]),
+                product("syrup", [0.045, 0.045, 0.18], [0.78, -0.05]),
+            ],
+            &[("syrup", "h3")],
+            &[],
+            &[],
+        )
+    };
+    // The approach the expert's geometry gives: the syrup's bottom would
+    // meet the bottle there.
+    let (arm, task, mut sim) = episode();
+    let lift = expert::picking([0.78, -0.05, 0.09], 0.18, task.cell.lift)[2].tip;
+    let approach = expert::placing(lift, [0.70, -0.50], 0.18, 0.10, [0.0, 0.0])[0].tip;
+    assert!(
+        (approach[0] - 0.77).abs() < 0.0525 && (approach[1] + 0.26).abs() < 0.0525,
+        "{approach:?}"
+    );
+    assert!(approach[2] - 0.18 < 0.22, "{approach:?}");
+    for planner in [Planner::Expert, Planner::Rrt { seed: 1 }] {
+        let (_, _, mut sim) = episode();
+        let report = execute::run(&mut sim, &arm, &task, &planner);
+        assert_packed(&report);
+        assert!(report.collisions.is_empty(), "{:?}", report.collisions);
+    }
+    let policy = Scripted::reaching(task.clone());
+    let report = run_learned(&mut sim, &arm, &task, &policy);
+    assert_packed(&report);
+    assert!(report.collisions.is_empty(), "{:?}", report.collisions);
+    assert!(report.fallbacks.is_empty(), "{:#?}", report.fallbacks);
 }
 
 /// A reasoner that picks a product the order does not select breaks the

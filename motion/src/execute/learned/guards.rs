@@ -356,6 +356,27 @@ impl Inside {
         Some(wrist.unwrap_or(plain))
     }
 
+    /// For a release whose product drops (let go above the expert's): the
+    /// product alone (not the cup or the wrist, which stay above it)
+    /// moved inside the walls by its padding and [`KEPT_MARGIN`], on each
+    /// axis where it fits, and how far (m) the product itself, unpadded,
+    /// reaches over a wall from `goal` (0 where it does not): landing on
+    /// the wall, it would tip off its slot.
+    pub(super) fn keep_dropped(&self, goal: [f64; 3]) -> ([f64; 3], f64) {
+        let mut kept = goal;
+        let mut over: f64 = 0.0;
+        for axis in 0..2 {
+            let (lo, hi) = self.product[axis];
+            if lo > hi {
+                continue;
+            }
+            kept[axis] = goal[axis].clamp(lo, hi);
+            let moved = (kept[axis] - goal[axis]).abs();
+            over = over.max(moved - HELD_PADDING - KEPT_MARGIN);
+        }
+        (kept, over)
+    }
+
     fn kept(&self, goal: [f64; 3], with_wrist: bool) -> Option<[f64; 3]> {
         let mut kept = goal;
         let mut fits = false;

@@ -19,8 +19,8 @@ pub use steps::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps, 
 
 use super::reasoner::{f32s, graph, in_slot, lifted};
 use super::station::{
-    Connect, Leg, Load, MAX_RAISES, PlanningBudget, RAISE_STEP, Route, SUCCESS_RADIUS, Station,
-    Unchecked, judge, leg_end,
+    Connect, Leg, Load, MAX_CARRY_RAISES, MAX_RAISES, PlanningBudget, RAISE_STEP, Route,
+    SUCCESS_RADIUS, Station, Unchecked, judge, leg_end,
 };
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
@@ -438,6 +438,28 @@ impl<W: World> Learned<'_, W> {
                 let mut first_action_us = None;
                 // The first attempt's shortfall is the one reported.
                 let mut rolled = self.rollout(start, goal, tolerance, load, &mut first_action_us);
+                // A point the product is carried through (the approach,
+                // above the slot) whose motion meets what stands under the
+                // way (a bottle taller than the carrying height) is
+                // raised, as the expert's is (`Station::solve`); the
+                // sub-goal is then where it was raised to (the back-up from
+                // the release rises as high).
+                if switch == Suction::Keep
+                    && plan.stage == Stage::Placing
+                    && matches!(rolled, Err(Shortfall::Collides { .. }))
+                    && let Some(route) = self.raised(
+                        start,
+                        goal,
+                        tolerance,
+                        load,
+                        (goal[2], goal[2] + RAISE_STEP * f64::from(MAX_CARRY_RAISES)),
+                        &mut first_action_us,
+                    )
+                    && let Some(end) = route.waypoints.last()
+                {
+                    goals[k][2] = goal[2].max(self.station.tip(end)[2]);
+                    rolled = Ok(route);
+                }
                 // A release whose motion collides is raised only as far
                 // as one too low needs: up to COLLIDING_RELEASE_RAISE above
                 // the expert's (or itself, when higher).
@@ -544,6 +566,44 @@ impl<W: World> Learned<'_, W> {
                         rolled = Ok(route);
                     }
                 }
+                // A release raised over the expert's lets the product drop
+                // past the rim, where one a millimetre over a wall lands
+                // on it and tips (a 10 mm tray in a slot flush with the
+                // wall, let go 10 cm up over it: 24 mm off its slot): its
+                // product is kept inside the walls at that height, or,
+                // where it would land on a wall and keeping it inside
+                // moves it more than a learned release is moved (or finds
+                // no way there), the expert's release is used.
+                let dropped = rolled
+                    .as_ref()
+                    .ok()
+                    .and_then(|r| r.waypoints.last())
+                    .map(|end| [goals[k][0], goals[k][1], self.station.tip(end)[2]])
+                    .filter(|aim| {
+                        switch == Suction::Off && aim[2] >= plan.expert[k].tip[2] + RAISE_STEP
+                    });
+                if let Some(aim) = dropped
+                    && !self.station.late()
+                    && let Some(inside) = plan.inside
+                    && let (kept, over) = inside.keep_dropped(aim)
+                    && kept != aim
+                {
+                    let by_m = (kept[0] - aim[0]).hypot(kept[1] - aim[1]);
+                    let route = (by_m <= KEEP_INSIDE)
+                        .then(|| {
+                            self.rollout(start, kept, BACK_UP_REACHED, load, &mut first_action_us)
+                                .ok()
+                        })
+                        .flatten();
+                    match route {
+                        Some(route) => {
+                            goals[k] = kept;
+                            rolled = Ok(route);
+                        }
+                        None if over > 0.0 => rolled = Err(Shortfall::OverWall { by_m }),
+                        None => {}
+                    }
+                }
                 if let Some(action_us) = first_action_us {
                     self.station.timing.network_us.push(subgoal_us + action_us);
                 }
@@ -554,8 +614,10 @@ impl<W: World> Learned<'_, W> {
             // tight slot) is not tried by RRT-Connect either, which would
             // raise it until free: let go from higher up, the product
             // would drop and land off its slot. The expert's release is
-            // used instead.
-            let colliding = rolled.as_ref().is_some_and(|r| release_collides(switch, r));
+            // used instead, as for a release dropped onto a wall.
+            let colliding = rolled.as_ref().is_some_and(|r| {
+                release_collides(switch, r) || matches!(r, Err(Shortfall::OverWall { .. }))
+            });
             let route = match rolled {
                 Some(Ok(route)) => route,
                 other => {
@@ -659,26 +721,16 @@ impl<W: World> Learned<'_, W> {
         .leaving_support()
     }
 
-    /// The checked way straight up to the height of `above` (the learned
-    /// "above the slot" sub-goal) from the released product `name`, its
-    /// end found by the dynamics policy's steps (by inverse kinematics
-    /// where they fall short); not sent: it is sent with the next
-    /// product's hover (or alone at the end of the run).
-    fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<Leg, Failure> {
-        let load = Load::released(name);
-        // The released product where it lies (its last observed place was
-        // under the cup). Observed before the planning is timed, as the
-        // other planners observe before they plan their back-up.
-        let obs = self.station.world.observe();
-        self.station.sync_products(&obs);
-        let started = self.station.begin();
+    /// The checked way from `start`, where the cup let go, straight up to
+    /// height `z`: its end found by the dynamics policy's steps (by
+    /// inverse kinematics where they fall short).
+    fn way_up(&self, start: Joints, z: f64, load: Load) -> Result<Route, Failure> {
         let s = &self.station;
-        let start = obs.joints;
         // Straight up from where the cup let go: a learned "above" a few
         // millimetres off in x or y would drag the cup along a wall.
         let [x, y, z0] = s.tip(&start);
         let up = SubGoal {
-            tip: [x, y, above[2]],
+            tip: [x, y, z],
             suction: Suction::Keep,
         };
         // The dynamics policy's steps up, as every learned motion goes
@@ -698,10 +750,10 @@ impl<W: World> Learned<'_, W> {
         .and_then(|steps| s.arm.into_limits(steps.last()?, &start));
         let target = match stepped {
             Some(q) => q,
-            None => s.solve(&up, 1, &start, 0.0, load, above[2])?.joints,
+            None => s.solve(&up, 1, &start, 0.0, load, z)?.joints,
         };
-        let route = match s.checked(1, start, &[target], load) {
-            Ok(route) => route,
+        match s.checked(1, start, &[target], load) {
+            Ok(route) => Ok(route),
             // A straight joint motion bows sideways; from a slot near a
             // wall, go up a vertical line of via points instead, and of
             // more where their segments still bow into the wall (a cup a
@@ -711,23 +763,47 @@ impl<W: World> Learned<'_, W> {
                     let mut near = start;
                     let mut vias = Vec::with_capacity(n);
                     for i in 1..=n {
-                        let z = z0 + (above[2] - z0) * i as f64 / n as f64;
+                        let h = z0 + (z - z0) * i as f64 / n as f64;
                         let via = SubGoal {
-                            tip: [x, y, z],
+                            tip: [x, y, h],
                             suction: Suction::Keep,
                         };
-                        near = s.solve(&via, 1, &near, 0.0, load, z)?.joints;
+                        near = s.solve(&via, 1, &near, 0.0, load, h)?.joints;
                         vias.push(near);
                     }
                     Ok(vias)
                 };
-                match s.checked(1, start, &line(RETREAT_VIAS)?, load) {
-                    Ok(route) => route,
-                    Err(_) => s
-                        .checked(1, start, &line(FINE_RETREAT_VIAS)?, load)
-                        .map_err(|_| straight)?,
-                }
+                s.checked(1, start, &line(RETREAT_VIAS)?, load)
+                    .or_else(|_| s.checked(1, start, &line(FINE_RETREAT_VIAS)?, load))
+                    .map_err(|_| straight)
             }
+        }
+    }
+
+    /// The checked way straight up to the height of `above` (the learned
+    /// "above the slot" sub-goal), or [`RAISE_STEP`]s higher where that
+    /// is blocked, from the released product `name` ([`Learned::way_up`]);
+    /// not sent: it is sent with the next product's hover (or alone at
+    /// the end of the run).
+    fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<Leg, Failure> {
+        let load = Load::released(name);
+        // The released product where it lies (its last observed place was
+        // under the cup). Observed before the planning is timed, as the
+        // other planners observe before they plan their back-up.
+        let obs = self.station.world.observe();
+        self.station.sync_products(&obs);
+        let started = self.station.begin();
+        let start = obs.joints;
+        let route = match self.way_up(start, above[2], load) {
+            Ok(route) => route,
+            // Up to a learned "above the slot" lower than what stands
+            // beside the slot (wrist 3 against a tall product packed next
+            // to it): higher, as far as that needs.
+            Err(first) => (1..=MAX_CARRY_RAISES)
+                .map(|i| above[2] + RAISE_STEP * f64::from(i))
+                .take_while(|_| !self.station.late())
+                .find_map(|z| self.way_up(start, z, load).ok())
+                .ok_or(first)?,
         };
         // Timed as a sub-goal, as the other planners' back-up is.
         let elapsed = self.station.spend(1, started)?;
