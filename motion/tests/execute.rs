@@ -595,6 +595,26 @@ fn a_colliding_release_is_raised_a_little_then_goes_to_the_experts() {
     assert!(matches!(f.why, Shortfall::Collides { .. }), "{f}");
 }
 
+/// A cell with one box, 100 mm deep, in front of the products (0.32 m by
+/// 0.20 m, its near wall at y = -0.35), with one slot `slot` at `at`.
+fn case_cell(slot: &str, at: [f64; 2]) -> CellScene {
+    CellScene {
+        name: "case".into(),
+        pending: ([0.40, -0.30], [0.85, 0.05]),
+        boxes: vec![BoxSpec {
+            name: "case".into(),
+            centre: [0.60, -0.45],
+            size: [0.32, 0.20, 0.10],
+        }],
+        slots: vec![SlotSpec {
+            name: slot.into(),
+            position: at,
+            box_index: 0,
+        }],
+        ..bench_cell()
+    }
+}
+
 /// A release raised over the expert's lets the product drop past the
 /// rim. A 10 mm tray in a slot flush with the wall of a 100 mm box, the
 /// wrist over the wall (every planner lets go well above the floor): a
@@ -604,21 +624,7 @@ fn a_colliding_release_is_raised_a_little_then_goes_to_the_experts() {
 /// a learned release is moved, the expert's release is used.
 #[test]
 fn a_release_dropped_over_a_wall_keeps_its_product_inside() {
-    let cell = CellScene {
-        name: "flush".into(),
-        pending: ([0.40, -0.30], [0.85, 0.05]),
-        boxes: vec![BoxSpec {
-            name: "case".into(),
-            centre: [0.60, -0.45],
-            size: [0.32, 0.20, 0.10],
-        }],
-        slots: vec![SlotSpec {
-            name: "h5".into(),
-            position: [0.60, -0.40],
-            box_index: 0,
-        }],
-        ..bench_cell()
-    };
+    let cell = case_cell("h5", [0.60, -0.40]);
     let tray = ProductSpec {
         name: "tray".into(),
         size: [0.09, 0.09, 0.01],
@@ -669,21 +675,7 @@ fn a_release_dropped_over_a_wall_keeps_its_product_inside() {
 /// planner by its own steps, without a fallback.
 #[test]
 fn a_carry_over_a_taller_product_is_raised_by_every_planner() {
-    let cell = CellScene {
-        name: "bar".into(),
-        pending: ([0.40, -0.30], [0.85, 0.05]),
-        boxes: vec![BoxSpec {
-            name: "case".into(),
-            centre: [0.60, -0.45],
-            size: [0.32, 0.20, 0.10],
-        }],
-        slots: vec![SlotSpec {
-            name: "h3".into(),
-            position: [0.70, -0.50],
-            box_index: 0,
-        }],
-        ..bench_cell()
-    };
+    let cell = case_cell("h3", [0.70, -0.50]);
     let product = |name: &str, size: [f64; 3], at: [f64; 2]| {
         (
             ProductSpec {
