@@ -9,7 +9,8 @@
 //! [`RELEASE_GAP`] above the box floor (suction off).
 
 use packwright_interface::outcome::Stage;
-use packwright_interface::scene::CellScene;
+use packwright_interface::scene::{CellScene, SlotSpec};
+use packwright_kinematics::body::{BOX_WALL, HELD_PADDING};
 
 /// Height of the hover point above a product's top face.
 pub const HOVER: f64 = 0.10;
@@ -19,6 +20,10 @@ pub const MIN_APPROACH_RADIUS: f64 = 0.35;
 pub const RIM_CLEARANCE: f64 = 0.05;
 /// Height of a held product's bottom over the box floor when released.
 pub const RELEASE_GAP: f64 = 0.005;
+/// How far (m) a released product is kept from its box's inner walls
+/// where the box has room ([`release_at`]): the planner's padding round a
+/// held product, and a millimetre for the grip's and the reach's error.
+pub const WALL_ROOM: f64 = HELD_PADDING + 0.001;
 
 /// What the suction does when a sub-goal is reached.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -115,6 +120,31 @@ pub fn placing(
     ]
 }
 
+/// Where the centre of a product of `size` is let go in `slot` of
+/// `cell`: the slot, moved on each axis just far enough that the product
+/// keeps [`WALL_ROOM`] from its box's inner walls, where the box is wide
+/// enough for that (else not moved on that axis). Lowered past a wall any
+/// closer, the planner's padded product meets the wall at every height:
+/// the release is raised until the product clears the rim, and dropped
+/// from there it catches the wall and lands tilted (a 110 mm card 1 mm
+/// from the wall of a 200 mm deep shipper landed 28 mm off its slot).
+/// Moved at most [`WALL_ROOM`] for a product inside the walls, well
+/// within the success radius.
+pub fn release_at(cell: &CellScene, slot: &SlotSpec, size: [f64; 3]) -> [f64; 2] {
+    let Some(b) = cell.boxes.get(slot.box_index) else {
+        return slot.position;
+    };
+    std::array::from_fn(|axis| {
+        let at = slot.position[axis];
+        // How far the product's centre may go from the box's centre.
+        let room = b.size[axis] / 2.0 - BOX_WALL - WALL_ROOM - size[axis] / 2.0;
+        if room < 0.0 {
+            return at;
+        }
+        at.clamp(b.centre[axis] - room, b.centre[axis] + room)
+    })
+}
+
 /// The box a slot belongs to, and its height.
 pub fn box_height(cell: &CellScene, slot: usize) -> f64 {
     cell.slots
@@ -143,5 +173,56 @@ mod tests {
         let behind = placing([0.55, -0.2, 0.2], [-0.55, 0.0], 0.05, 0.08, [0.1, 0.05]);
         let [x, y, _] = behind[0].tip;
         assert!((x - 0.1).hypot(y - 0.05) >= MIN_APPROACH_RADIUS - 1e-9);
+    }
+
+    /// A 100 mm box 200 mm wide at (0, 0.6): its inside runs 96 mm either
+    /// way in x, 46 mm in y.
+    fn boxed(slot: [f64; 2]) -> (CellScene, SlotSpec) {
+        let slot = SlotSpec {
+            name: "s".into(),
+            position: slot,
+            box_index: 0,
+        };
+        let cell = CellScene {
+            name: "c".into(),
+            base: [0.0; 3],
+            suction: 0.1,
+            lift: 0.15,
+            speed: 1.0,
+            grip_settle: 0.1,
+            release_settle: 0.5,
+            descent: 1.0,
+            pending: ([0.4, -0.4], [0.8, -0.1]),
+            boxes: vec![packwright_interface::scene::BoxSpec {
+                name: "b".into(),
+                centre: [0.0, 0.6],
+                size: [0.2, 0.1, 0.1],
+            }],
+            slots: vec![slot.clone()],
+        };
+        (cell, slot)
+    }
+
+    #[test]
+    fn a_release_keeps_its_product_off_the_walls_where_the_box_has_room() {
+        let close =
+            |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12;
+        // Far from the walls: the slot itself.
+        let (cell, slot) = boxed([0.02, 0.61]);
+        assert!(close(release_at(&cell, &slot, [0.05; 3]), [0.02, 0.61]));
+        // 1 mm from the inside of the +x wall (96 - 25 - 70 mm): moved in
+        // to WALL_ROOM (4 mm), y unchanged.
+        let (cell, slot) = boxed([0.07, 0.61]);
+        let at = release_at(&cell, &slot, [0.05; 3]);
+        assert!(close(at, [0.096 - WALL_ROOM - 0.025, 0.61]), "{at:?}");
+        // Against the -y wall too, and a product sticking into the wall.
+        let (cell, slot) = boxed([-0.07, 0.58]);
+        let at = release_at(&cell, &slot, [0.05, 0.06, 0.05]);
+        assert!(close(at, [-0.067, 0.554 + WALL_ROOM + 0.03]), "{at:?}");
+        // 90 mm deep in a 92 mm inside: no room for 4 mm either side, y
+        // stays where the slot is; x still moves.
+        let (cell, slot) = boxed([0.07, 0.601]);
+        let at = release_at(&cell, &slot, [0.05, 0.09, 0.05]);
+        assert!(close(at, [0.067, 0.601]), "{at:?}");
     }
 }

@@ -190,7 +190,7 @@ impl Reachability {
         let lift = self.picking_goals(size, at)[2].tip;
         let goals = expert::placing(
             lift,
-            spec.position,
+            expert::release_at(&self.cell, spec, size),
             size[2],
             expert::box_height(&self.cell, slot),
             [self.cell.base[0], self.cell.base[1]],

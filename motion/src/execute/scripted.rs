@@ -303,7 +303,7 @@ impl<W: World> Scripted<'_, W> {
 
         let obs = self.station.world.observe();
         let held = gripped;
-        let slot = cell.slots[s].position;
+        let slot = expert::release_at(cell, &cell.slots[s], spec.size);
         let placing = expert::placing(
             picking[2].tip,
             slot,

@@ -445,6 +445,30 @@ mod tests {
     }
 
     #[test]
+    fn a_dropped_release_keeps_its_product_inside_and_says_how_far_it_was_over() {
+        let cell = narrow_box();
+        // A 60 mm deep product, 20 mm wide: its padded bounds leave 2 mm
+        // either way of the centre line in y; the cup (20 mm, 10 mm
+        // padding) would leave none, but a dropped product is kept alone.
+        let inside = Inside::new(&cell, 0, [0.02, 0.06, 0.05], [0.0, 0.0], &down(0.0))
+            .expect("the box exists");
+        let at = |y: f64| [-0.2, 0.65 + y, 0.2];
+        assert_eq!(inside.keep_dropped(at(0.001)), (at(0.001), 0.0), "inside");
+        // 4 mm towards +y: moved back 2 mm, the product itself still 2 mm
+        // inside the wall (36 - 30 - 4).
+        let (kept, over) = inside.keep_dropped(at(0.004));
+        assert!(
+            (kept[1] - 0.652).abs() < 1e-9 && over == 0.0,
+            "{kept:?} {over}"
+        );
+        // 9 mm: it would land 3 mm over the wall.
+        let (kept, over) = inside.keep_dropped(at(-0.009));
+        assert!((kept[1] - 0.648).abs() < 1e-9, "{kept:?}");
+        assert!((over - 0.003).abs() < 1e-9, "{over}");
+        assert_eq!((kept[0], kept[2]), (-0.2, 0.2), "x and z stay");
+    }
+
+    #[test]
     fn a_release_against_a_wall_is_kept_inside_the_box() {
         let cell = narrow_box();
         // A 60 mm deep product: 36 - 30 - 3 mm padding - 1 mm margin

@@ -943,7 +943,7 @@ impl<W: World> Learned<'_, W> {
         );
         self.station.sync_products(&obs);
         let rim = task.slot_rim(s);
-        let slot = cell.slots[s].position;
+        let slot = expert::release_at(cell, &cell.slots[s], spec.size);
         let expert = expert::placing(
             picked.tips[2],
             [slot[0] - grip[0], slot[1] - grip[1]],
