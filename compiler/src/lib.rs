@@ -29,7 +29,7 @@ pub use emit::{Written, file};
 pub use error::Error;
 pub use output::{Artifact, MemoryOutput, Output, OutputFile};
 pub use source::{FileId, Loader, Loc, MemoryLoader, SourceMap};
-pub use warning::Warning;
+pub use warning::{HELD_ROOM, Warning};
 pub use workspace::{Anywhere, Workspace};
 
 use std::path::PathBuf;
@@ -110,6 +110,7 @@ pub fn check(
     if !errors.is_empty() {
         return Err(fail(loaded.sources, errors));
     }
+    warnings.extend(validate::warnings(&model));
     warnings.sort_by_key(Warning::at);
     warnings.dedup();
     let expanded = match expand::expand(&model) {

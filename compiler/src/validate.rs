@@ -4,6 +4,7 @@
 use crate::error::Error;
 use crate::model::*;
 use crate::source::Loc;
+use crate::warning::{HELD_ROOM, Warning};
 
 /// Slots closer than this are taken for the same slot.
 pub const MIN_SLOT_DISTANCE: f64 = 0.010;
@@ -42,6 +43,95 @@ pub fn validate(m: &Model) -> Vec<Error> {
         check_choose(m, &m.inventories[s.inventory], &s.choose, &mut errors);
     }
     errors
+}
+
+/// What the geometry allows but the robot may fail at: products placed
+/// closer together than the room kept round a held product, in an order
+/// or by a generator (each slot pair once per generator, with the
+/// products that come closest there).
+pub fn warnings(m: &Model) -> Vec<Warning> {
+    let mut warnings = Vec::new();
+    for order in &m.orders {
+        let inv = &m.inventories[order.inventory];
+        let cell = &m.cells[inv.cell];
+        let placed = |i: usize| {
+            let a = &order.assignment[i];
+            let product = &m.products[inv.entries[a.entry].product];
+            (product, a.slot, product.footprint(cell.slots[a.slot].at))
+        };
+        for i in 0..order.assignment.len() {
+            for j in 0..i {
+                let ((pa, sa, fa), (pb, sb, fb)) = (placed(j), placed(i));
+                if let Some(w) =
+                    too_close(cell, order.assignment[i].loc, (pa, sa, fa), (pb, sb, fb))
+                {
+                    warnings.push(w);
+                }
+            }
+        }
+    }
+    for c in m
+        .demo_sets
+        .iter()
+        .map(|d| (&d.choose, d.inventory))
+        .chain(m.scenario_sets.iter().map(|s| (&s.choose, s.inventory)))
+    {
+        let (choose, inv) = c;
+        let inv = &m.inventories[inv];
+        let cell = &m.cells[inv.cell];
+        if choose.n < 2 {
+            continue;
+        }
+        let product = |e: usize| &m.products[inv.entries[e].product];
+        for (i, &s) in choose.slots.iter().enumerate() {
+            for &t in &choose.slots[..i] {
+                let closest = choose
+                    .entries
+                    .iter()
+                    .flat_map(|&a| {
+                        choose
+                            .entries
+                            .iter()
+                            .filter(move |&&b| b != a)
+                            .map(move |&b| (a, b))
+                    })
+                    .map(|(a, b)| {
+                        let fa = product(a).footprint(cell.slots[t].at);
+                        let fb = product(b).footprint(cell.slots[s].at);
+                        (fa.gap(&fb), a, b, fa, fb)
+                    })
+                    .min_by(|x, y| x.0.total_cmp(&y.0));
+                if let Some((_, a, b, fa, fb)) = closest
+                    && let Some(w) =
+                        too_close(cell, choose.loc, (product(a), t, fa), (product(b), s, fb))
+                {
+                    warnings.push(w);
+                }
+            }
+        }
+    }
+    warnings
+}
+
+/// [`Warning::TooClose`] for two placed products (product, slot,
+/// footprint) in the same box closer than [`HELD_ROOM`] but not
+/// overlapping (an error, `PlacedOverlap`).
+fn too_close(
+    cell: &Cell,
+    at: Loc,
+    (pa, sa, fa): (&Product, usize, Rect),
+    (pb, sb, fb): (&Product, usize, Rect),
+) -> Option<Warning> {
+    let gap = fa.gap(&fb);
+    let same_box = cell.slots[sa].box_index == cell.slots[sb].box_index;
+    (same_box && gap < HELD_ROOM - 1e-9 && !fa.overlaps(&fb)).then(|| Warning::TooClose {
+        at,
+        a: pa.name.clone(),
+        slot_a: cell.slots[sa].name.clone(),
+        b: pb.name.clone(),
+        slot_b: cell.slots[sb].name.clone(),
+        gap_mm: gap * 1000.0,
+    })
 }
 
 fn distance_to_base(cell: &Cell, p: [f64; 2]) -> f64 {

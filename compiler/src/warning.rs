@@ -23,7 +23,27 @@ pub enum Warning {
         /// its place and its entry.
         by: Option<(String, [f64; 2], Loc)>,
     },
+    /// Two products placed in neighbouring slots with less room between
+    /// them than the planner keeps round a held product
+    /// ([`HELD_ROOM`]): the second cannot be lowered past the first, so
+    /// it is let go above the first one's top and dropped, and can land
+    /// on it.
+    TooClose {
+        /// The assignment, or the generator that may place them so.
+        at: Loc,
+        a: String,
+        slot_a: String,
+        b: String,
+        slot_b: String,
+        gap_mm: f64,
+    },
 }
+
+/// The room (m) the motion planner keeps round a held product
+/// (`packwright_kinematics::body::HELD_PADDING`; the compiler does not
+/// depend on the robot crates, and a test in `packwright-pipeline` checks
+/// that the two agree).
+pub const HELD_ROOM: f64 = 0.003;
 
 impl fmt::Display for Warning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -47,6 +67,18 @@ impl fmt::Display for Warning {
                     None => f.write_str("while the other products of its inventory stand"),
                 }
             }
+            Warning::TooClose {
+                a,
+                slot_a,
+                b,
+                slot_b,
+                gap_mm,
+                ..
+            } => write!(
+                f,
+                "products `{a}` in slot `{slot_a}` and `{b}` in slot `{slot_b}` are {gap_mm:.1} mm apart, less than the {:.0} mm the robot keeps round a product it holds",
+                HELD_ROOM * 1000.0
+            ),
         }
     }
 }
@@ -56,13 +88,14 @@ impl Warning {
     pub fn code(&self) -> &'static str {
         match self {
             Warning::PickBlocked { .. } => "W001",
+            Warning::TooClose { .. } => "W002",
         }
     }
 
     /// Where the caret goes.
     pub fn at(&self) -> Loc {
         match self {
-            Warning::PickBlocked { at, .. } => *at,
+            Warning::PickBlocked { at, .. } | Warning::TooClose { at, .. } => *at,
         }
     }
 
@@ -72,6 +105,7 @@ impl Warning {
             Warning::PickBlocked { .. } => {
                 "every arm pose that reaches it meets a product beside it".into()
             }
+            Warning::TooClose { .. } => "placed too close together".into(),
         }
     }
 
@@ -82,7 +116,7 @@ impl Warning {
                 by: Some((other, _, at)),
                 ..
             } => vec![(*at, format!("`{other}` stands here"))],
-            Warning::PickBlocked { .. } => Vec::new(),
+            Warning::PickBlocked { .. } | Warning::TooClose { .. } => Vec::new(),
         }
     }
 
@@ -98,6 +132,10 @@ impl Warning {
             ),
             Warning::PickBlocked { product, .. } => format!(
                 "a package packs `{product}` only once the products beside it are gone: pack those first, or give it more room"
+            ),
+            Warning::TooClose { gap_mm, .. } => format!(
+                "the one packed second cannot be lowered past the other: it is let go above the other's top and can land on it; move the slots at least {:.1} mm further apart",
+                (HELD_ROOM * 1000.0 - gap_mm).max(0.1)
             ),
         }
     }

@@ -452,7 +452,10 @@ fn standing_products_block_the_start_as_an_error_and_a_pick_as_a_warning() {
     assert_eq!(c.warnings.len(), 1, "{:#?}", c.warnings);
     let Warning::PickBlocked {
         product, by, pose, ..
-    } = &c.warnings[0];
+    } = &c.warnings[0]
+    else {
+        panic!("a blocked pick: {:#?}", c.warnings);
+    };
     assert_eq!((product.as_str(), *pose), ("A", Pose::TopFace));
     assert_eq!(by.as_ref().map(|b| b.0.as_str()), Some("B"));
     let asked = ws.asked.into_inner();

@@ -159,3 +159,17 @@ impl Workspace for RobotWorkspace {
         .flatten()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// `check`'s W002 (products placed too close together) uses its own
+    /// copy of the room the planner keeps round a held product, since the
+    /// compiler does not depend on the robot crates: the two must agree.
+    #[test]
+    fn the_compilers_room_round_a_held_product_is_the_planners() {
+        assert_eq!(
+            packwright_compiler::HELD_ROOM,
+            packwright_kinematics::body::HELD_PADDING
+        );
+    }
+}
