@@ -29,6 +29,12 @@ pub(crate) const RAISE_STEP: f64 = 0.01;
 /// Most raises of a release point (1 m in all): the search is bounded
 /// whatever the sub-goal.
 pub(crate) const MAX_RAISES: u32 = 100;
+/// Paths [`Station::search`] tries before it gives up on one whose
+/// commands collide.
+pub(crate) const SEARCH_TRIES: u64 = 4;
+/// How far apart the seeds of those tries are (the next sub-goal's search
+/// is seeded one more).
+const SEARCH_SEED_STRIDE: u64 = 1_000_003;
 /// The lowest a lift may be lowered to, above where the cup gripped (m):
 /// the cell language's smallest `lift`.
 pub(crate) const MIN_LIFT: f64 = 0.02;
@@ -572,7 +578,12 @@ impl<'a, W: World> Station<'a, W> {
 
     /// RRT-Connect's search from `from` to `to` (seeded by `seed`, within
     /// the planning deadline), its path checked as the commands that will
-    /// be sent; [`Failure::NoPath`] if it finds none.
+    /// be sent; [`Failure::NoPath`] if it finds none. A path whose
+    /// commands collide (its edges pass the search's check, the commands
+    /// graze an obstacle the start stands close to: wrist 3 beside a tall
+    /// product packed next to the slot it backed up from) is searched for
+    /// again with the next seeds, up to [`SEARCH_TRIES`] paths in all;
+    /// the first path's collision is the one reported.
     pub fn search(
         &self,
         seed: u64,
@@ -587,13 +598,27 @@ impl<'a, W: World> Station<'a, W> {
             held: load.held,
             ignore: load.ignore,
         };
-        let config = RrtConfig {
-            seed,
-            deadline: self.deadline,
-            ..RrtConfig::default()
-        };
-        let path = rrt::search(&query, from, to, &config).ok_or(Failure::NoPath { subgoal: k })?;
-        self.checked(k, from, path.get(1..).unwrap_or(&[]), load)
+        let mut first = None;
+        for attempt in 0..SEARCH_TRIES {
+            let config = RrtConfig {
+                seed: seed.wrapping_add(attempt.wrapping_mul(SEARCH_SEED_STRIDE)),
+                deadline: self.deadline,
+                ..RrtConfig::default()
+            };
+            let Some(path) = rrt::search(&query, from, to, &config) else {
+                break;
+            };
+            match self.checked(k, from, path.get(1..).unwrap_or(&[]), load) {
+                Ok(route) => return Ok(route),
+                Err(why) => {
+                    first.get_or_insert(why);
+                }
+            }
+            if self.late() {
+                break;
+            }
+        }
+        Err(first.unwrap_or(Failure::NoPath { subgoal: k }))
     }
 
     /// The checked commands from `from` to a solved sub-goal: the
