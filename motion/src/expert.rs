@@ -184,21 +184,13 @@ mod tests {
             box_index: 0,
         };
         let cell = CellScene {
-            name: "c".into(),
-            base: [0.0; 3],
-            suction: 0.1,
-            lift: 0.15,
-            speed: 1.0,
-            grip_settle: 0.1,
-            release_settle: 0.5,
-            descent: 1.0,
-            pending: ([0.4, -0.4], [0.8, -0.1]),
             boxes: vec![packwright_interface::scene::BoxSpec {
                 name: "b".into(),
                 centre: [0.0, 0.6],
                 size: [0.2, 0.1, 0.1],
             }],
             slots: vec![slot.clone()],
+            ..crate::collision::graze::cell()
         };
         (cell, slot)
     }
