@@ -70,13 +70,12 @@ pub fn warnings(m: &Model) -> Vec<Warning> {
             }
         }
     }
-    for c in m
+    for (choose, inv) in m
         .demo_sets
         .iter()
         .map(|d| (&d.choose, d.inventory))
         .chain(m.scenario_sets.iter().map(|s| (&s.choose, s.inventory)))
     {
-        let (choose, inv) = c;
         let inv = &m.inventories[inv];
         let cell = &m.cells[inv.cell];
         if choose.n < 2 {
