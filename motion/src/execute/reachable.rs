@@ -13,7 +13,8 @@
 //! a start pose or a pick the empty cell allows).
 
 use super::station::{
-    Load, MAX_CARRY_RAISES, MAX_RAISES, MIN_LIFT, RAISE_STEP, READY, home_on, home_tip, solutions,
+    Load, MAX_CARRY_RAISES, MAX_RAISES, MIN_LIFT, READY, home_on, home_tip, lowerings, raises,
+    solutions,
 };
 use crate::collision::{Checker, Held, ProductBody};
 use crate::expert::{self, SubGoal};
@@ -153,8 +154,8 @@ impl Reachability {
         // down to MIN_LIFT above the top face (as `Station::solve` does).
         let gripped = Held::under_cup("held", size, self.cell.suction, Vector3::zeros());
         let lifting = gripped.leaving_support();
-        let lowered: Vec<f64> = (0..=MAX_RAISES)
-            .map(|i| goals[2].tip[2] - RAISE_STEP * f64::from(i))
+        let lowered: Vec<f64> = std::iter::once(goals[2].tip[2])
+            .chain(lowerings(goals[2].tip[2], MAX_RAISES))
             .take_while(|z| *z >= goals[1].tip[2] + MIN_LIFT)
             .collect();
         for (k, goal) in goals.iter().enumerate() {
@@ -198,15 +199,15 @@ impl Reachability {
         let held = Held::under_cup("held", size, self.cell.suction, Vector3::zeros());
         let load = Load::holding(&held);
         let ceiling = goals[1].tip[2];
-        let raised: Vec<f64> = (0..=MAX_RAISES)
-            .map(|i| goals[2].tip[2] + RAISE_STEP * f64::from(i))
+        let raised: Vec<f64> = std::iter::once(goals[2].tip[2])
+            .chain(raises(goals[2].tip[2], MAX_RAISES))
             .take_while(|z| *z <= ceiling)
             .collect();
         // The approach and the point above the slot are raised where every
         // arm pose collides, as `Station::solve` raises them.
         let carried = |goal: &SubGoal| -> Vec<f64> {
-            (0..=MAX_CARRY_RAISES)
-                .map(|i| goal.tip[2] + RAISE_STEP * f64::from(i))
+            std::iter::once(goal.tip[2])
+                .chain(raises(goal.tip[2], MAX_CARRY_RAISES))
                 .collect()
         };
         let mut above = Vec::new();

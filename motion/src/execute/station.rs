@@ -29,6 +29,19 @@ pub(crate) const RAISE_STEP: f64 = 0.01;
 /// Most raises of a release point (1 m in all): the search is bounded
 /// whatever the sub-goal.
 pub(crate) const MAX_RAISES: u32 = 100;
+/// The heights `times` [`RAISE_STEP`]s above `z`, the nearest first (`z`
+/// itself not among them): the candidates of every raise the planners
+/// search, and [`Reachability`](super::reachable::Reachability) with
+/// them, from one expression so that they agree to the bit.
+pub(crate) fn raises(z: f64, times: u32) -> impl Iterator<Item = f64> {
+    (1..=times).map(move |i| z + RAISE_STEP * f64::from(i))
+}
+
+/// [`raises`] downwards: a lift lowered.
+pub(crate) fn lowerings(z: f64, times: u32) -> impl Iterator<Item = f64> {
+    (1..=times).map(move |i| z - RAISE_STEP * f64::from(i))
+}
+
 /// Paths [`Station::search`] tries before it gives up on one whose
 /// commands collide.
 pub(crate) const SEARCH_TRIES: u64 = 4;
@@ -434,8 +447,7 @@ impl<'a, W: World> Station<'a, W> {
             .or_else(|| {
                 (goal.suction == Suction::Off)
                     .then(|| {
-                        (1..=MAX_RAISES)
-                            .map(|i| goal.tip[2] + RAISE_STEP * f64::from(i))
+                        raises(goal.tip[2], MAX_RAISES)
                             .take_while(|z| *z <= ceiling)
                             .find_map(solve)
                     })
@@ -445,8 +457,7 @@ impl<'a, W: World> Station<'a, W> {
                 lifting
                     .then(|| {
                         let floor = self.tip(from)[2] + MIN_LIFT;
-                        (1..=MAX_RAISES)
-                            .map(|i| goal.tip[2] - RAISE_STEP * f64::from(i))
+                        lowerings(goal.tip[2], MAX_RAISES)
                             .take_while(|z| *z >= floor)
                             .find_map(solve)
                     })
@@ -454,11 +465,7 @@ impl<'a, W: World> Station<'a, W> {
             })
             .or_else(|| {
                 carried
-                    .then(|| {
-                        (1..=MAX_CARRY_RAISES)
-                            .map(|i| goal.tip[2] + RAISE_STEP * f64::from(i))
-                            .find_map(solve)
-                    })
+                    .then(|| raises(goal.tip[2], MAX_CARRY_RAISES).find_map(solve))
                     .flatten()
             })
             .ok_or_else(|| {

@@ -20,7 +20,7 @@ pub use steps::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps, 
 use super::reasoner::{f32s, graph, in_slot, lifted};
 use super::station::{
     Connect, Leg, Load, MAX_CARRY_RAISES, MAX_RAISES, PlanningBudget, RAISE_STEP, Route,
-    SUCCESS_RADIUS, Station, Unchecked, judge, leg_end,
+    SUCCESS_RADIUS, Station, Unchecked, judge, leg_end, raises,
 };
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
@@ -260,8 +260,7 @@ impl<W: World> Learned<'_, W> {
         from: f64,
         (above, ceiling): (f64, f64),
     ) -> impl Iterator<Item = f64> + '_ {
-        (1..=MAX_RAISES)
-            .map(move |i| from + RAISE_STEP * f64::from(i))
+        raises(from, MAX_RAISES)
             .skip_while(move |z| *z <= above)
             .take_while(move |z| *z <= ceiling && !self.station.late())
     }
@@ -799,8 +798,7 @@ impl<W: World> Learned<'_, W> {
             // Up to a learned "above the slot" lower than what stands
             // beside the slot (wrist 3 against a tall product packed next
             // to it): higher, as far as that needs.
-            Err(first) => (1..=MAX_CARRY_RAISES)
-                .map(|i| above[2] + RAISE_STEP * f64::from(i))
+            Err(first) => raises(above[2], MAX_CARRY_RAISES)
                 .take_while(|_| !self.station.late())
                 .find_map(|z| self.way_up(start, z, load).ok())
                 .ok_or(first)?,
