@@ -22,7 +22,9 @@ pub const RIM_CLEARANCE: f64 = 0.05;
 pub const RELEASE_GAP: f64 = 0.005;
 /// How far (m) a released product is kept from its box's inner walls
 /// where the box has room ([`release_at`]): the planner's padding round a
-/// held product, and a millimetre for the grip's and the reach's error.
+/// held product, and a millimetre for the grip's and the reach's error;
+/// the learned planner keeps a moved release's product as far in (its
+/// guards assert that the two agree).
 pub const WALL_ROOM: f64 = HELD_PADDING + 0.001;
 
 /// What the suction does when a sub-goal is reached.

@@ -236,6 +236,9 @@ pub(super) const KEEP_INSIDE: f64 = 0.006;
 /// walls: it is reached within [`BACK_UP_REACHED`], and as far again is
 /// left for rounding and the flange's small tilt.
 const KEPT_MARGIN: f64 = 2.0 * BACK_UP_REACHED;
+// A kept product stands as far inside the walls as the expert lets one go
+// (`expert::release_at`): the two rooms are one.
+const _: () = assert!(crate::expert::WALL_ROOM == HELD_PADDING + KEPT_MARGIN);
 
 /// Whether `rolled` is a release (`switch`) whose motion would collide.
 pub(super) fn release_collides(switch: Suction, rolled: &Result<Route, Shortfall>) -> bool {
