@@ -442,9 +442,15 @@ impl<W: World> Learned<'_, W> {
                 // way (a bottle taller than the carrying height) is
                 // raised, as the expert's is (`Station::solve`); the
                 // sub-goal is then where it was raised to (the back-up from
-                // the release rises as high).
+                // the release rises as high). So is a hover, whose motion
+                // sweeps the wrist past a product standing taller than it
+                // (a 280 mm vase beside a packet); the guarded descent
+                // onto the top face is then longer. The expert goes there
+                // with another arm shape instead, which the policy's
+                // steps, keeping the start's shape, cannot reach.
+                let raisable = plan.stage == Stage::Placing || k == 0;
                 if switch == Suction::Keep
-                    && plan.stage == Stage::Placing
+                    && raisable
                     && matches!(rolled, Err(Shortfall::Collides { .. }))
                     && let Some(route) = self.raised(
                         start,
