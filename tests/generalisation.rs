@@ -438,6 +438,28 @@ fn a_grip_with_no_free_way_up_is_made_again_with_another_arm_shape() {
     }
 }
 
+/// A bakery's hamper (tests/cells/bakery.pack): small items wait behind
+/// biscuit tins and a cordial bottle 240-270 mm tall. The learned contact
+/// on the fudge, in the shape the policy's steps kept from the stage's
+/// start, put wrist 1 against the cordial; RRT-Connect from the learned
+/// hover changed the arm's shape down among the products, and two
+/// fallbacks later the card's way back up was blocked: the package
+/// stopped, where the expert and RRT-Connect pack it. A colliding
+/// contact now plans the picking stage again from its start, gripping
+/// with a free shape (a fallback from sub-goal 1), and the package is
+/// complete.
+#[test]
+fn a_contact_beside_a_taller_product_is_gripped_again_with_a_free_shape() {
+    let report = executes_file("tests/cells/bakery.pack", "bakery_four/09");
+    assert_eq!(report["complete"], true, "{report}");
+    let regripped = report["fallbacks"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .any(|f| f["stage"] == "picking" && f["subgoal"] == 2 && f["expert_from"] == 1);
+    assert!(regripped, "{report}");
+}
+
 /// A cell whose products wait 0.29 m from the base axis
 /// (tests/cells/near_flip.pack). The expert solved each sub-goal nearest
 /// the one before: over one product the contact nearest the hover had

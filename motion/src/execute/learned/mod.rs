@@ -445,7 +445,9 @@ impl<W: World> Learned<'_, W> {
         // The product as it will hang once gripped.
         let mut gripped: Option<Held> = None;
         let kinds = SubGoalKind::of(plan.stage);
-        for ((k, switch), kind) in schedule(plan.stage).into_iter().enumerate().zip(kinds) {
+        'subgoals: for ((k, switch), kind) in
+            schedule(plan.stage).into_iter().enumerate().zip(kinds)
+        {
             let load = gripped.as_ref().map_or(plan.load, Load::holding);
             // The motion onto a top face is the guarded descent.
             let load = if switch == Suction::On {
@@ -680,12 +682,22 @@ impl<W: World> Learned<'_, W> {
             });
             let route = match rolled {
                 Some(Ok(route)) => route,
-                other => {
+                other => 'fell: {
                     let why = match (fallen, off, other) {
                         (false, Some(distance_m), _) => Some(Shortfall::OffTarget { distance_m }),
                         (_, _, Some(Err(why))) => Some(why),
                         _ => None,
                     };
+                    // A learned contact that collides (the arm's shape
+                    // kept from the stage's start puts a wrist or the
+                    // forearm into a taller product standing beside, or
+                    // folds the forearm into the base): RRT-Connect from
+                    // the learned hover would change the arm's shape down
+                    // among the products, and leave the lift in a shape
+                    // the next stage's steps cannot follow. The stage
+                    // again from its start instead, as for a lift with no
+                    // way up.
+                    let shape_blocked = regrip::contact_blocked(plan, k, why.as_ref());
                     if let Some(why) = why {
                         self.fallbacks.push(Fallback {
                             product: plan.product.to_owned(),
@@ -696,50 +708,62 @@ impl<W: World> Learned<'_, W> {
                         });
                     }
                     fallen = true;
-                    let target = (off.is_none() && !colliding).then_some(SubGoal {
-                        tip: goal,
-                        suction: switch,
-                    });
-                    let fell = self.fall_back(k, start, target, &plan.expert, load, ceiling);
-                    let (route, expert) = match fell {
-                        Ok(found) => found,
-                        // No way up from the contact reached: the stage
-                        // again from its start, gripping with a shape
-                        // the lift leaves freely.
-                        Err(why) if regrip::lift_blocked(plan, k, &why) && !self.station.late() => {
-                            let Some(regripped) = self.regrip(plan, from) else {
-                                return Err(why);
-                            };
-                            let elapsed = self.station.spend(k + 1, started)?;
-                            self.station.timing.subgoal(kind, elapsed * 1e6);
-                            legs.truncate(pending_legs);
-                            self.station.subgoals.truncate(subgoals_before);
-                            for (i, (leg, end)) in regripped.into_iter().enumerate() {
-                                goals[i] = plan.expert[i].tip;
-                                tips[i] = self.station.tip(&end);
-                                self.station.subgoals.push(tips[i]);
-                                legs.push(leg);
+                    let again = (shape_blocked && !self.station.late())
+                        .then(|| self.regrip(plan, from))
+                        .flatten();
+                    let regripped = match again {
+                        Some(regripped) => regripped,
+                        None => {
+                            let target = (off.is_none() && !colliding).then_some(SubGoal {
+                                tip: goal,
+                                suction: switch,
+                            });
+                            match self.fall_back(k, start, target, &plan.expert, load, ceiling) {
+                                Ok((route, expert)) => {
+                                    if expert {
+                                        goals[k] = plan.expert[k].tip;
+                                        if let Some(f) = self.fallbacks.last_mut()
+                                            && f.product == plan.product
+                                            && f.stage == plan.stage
+                                        {
+                                            f.expert_from.get_or_insert(k + 1);
+                                        }
+                                    }
+                                    break 'fell route;
+                                }
+                                // No way up from the contact reached: the
+                                // stage again from its start, gripping with
+                                // a shape the lift leaves freely.
+                                Err(why)
+                                    if regrip::lift_blocked(plan, k, &why)
+                                        && !self.station.late() =>
+                                {
+                                    let Some(regripped) = self.regrip(plan, from) else {
+                                        return Err(why);
+                                    };
+                                    regripped
+                                }
+                                Err(why) => return Err(why),
                             }
-                            if let Some(f) = self.fallbacks.last_mut()
-                                && f.product == plan.product
-                                && f.stage == plan.stage
-                            {
-                                f.expert_from = Some(1);
-                            }
-                            break;
                         }
-                        Err(why) => return Err(why),
                     };
-                    if expert {
-                        goals[k] = plan.expert[k].tip;
-                        if let Some(f) = self.fallbacks.last_mut()
-                            && f.product == plan.product
-                            && f.stage == plan.stage
-                        {
-                            f.expert_from.get_or_insert(k + 1);
-                        }
+                    let elapsed = self.station.spend(k + 1, started)?;
+                    self.station.timing.subgoal(kind, elapsed * 1e6);
+                    legs.truncate(pending_legs);
+                    self.station.subgoals.truncate(subgoals_before);
+                    for (i, (leg, end)) in regripped.into_iter().enumerate() {
+                        goals[i] = plan.expert[i].tip;
+                        tips[i] = self.station.tip(&end);
+                        self.station.subgoals.push(tips[i]);
+                        legs.push(leg);
                     }
-                    route
+                    if let Some(f) = self.fallbacks.last_mut()
+                        && f.product == plan.product
+                        && f.stage == plan.stage
+                    {
+                        f.expert_from = Some(1);
+                    }
+                    break 'subgoals;
                 }
             };
             let elapsed = self.station.spend(k + 1, started)?;

@@ -1,5 +1,6 @@
-//! A grip the lift cannot leave. The dynamics policy keeps the arm's
-//! shape (elbow, wrist) from where a stage starts, so a product close
+//! A grip the lift cannot leave, or a contact that collides. The
+//! dynamics policy keeps the arm's shape (elbow, wrist) from where a
+//! stage starts, so a product close
 //! to the base can be gripped with the forearm folded so far that every
 //! way up folds it into the base or the upper arm, where the expert,
 //! solving the contact by inverse kinematics, grips with another shape.
@@ -7,7 +8,11 @@
 //! planned again from its start by the expert's sub-goals, with the
 //! first contact shape (nearest the start first) from which the descent
 //! and the lift are free (`Station::grip`, which the expert and
-//! RRT-Connect use alike).
+//! RRT-Connect use alike). So is a learned contact that collides (wrist 1
+//! against a 270 mm bottle standing beside the product picked, the
+//! forearm folded into the base): RRT-Connect from the learned hover
+//! would change the arm's shape down among the products and leave the
+//! lift in a shape the next stage's steps cannot follow.
 //!
 //! Invariant: every route returned is checked as it will be sent, with
 //! the load of its leg; nothing is sent here.
@@ -16,8 +21,17 @@ use super::{Learned, StagePlan};
 use crate::execute::station::{Connect, Leg, Load};
 use crate::expert::schedule;
 use packwright_interface::World;
-use packwright_interface::outcome::{Failure, Stage};
+use packwright_interface::outcome::{Failure, Shortfall, Stage};
 use packwright_kinematics::Joints;
+
+/// Whether `why`, the learned motion's shortfall at sub-goal `k + 1` of
+/// a picking stage, is a contact that collides: the shape the policy's
+/// steps kept from the stage's start meets something there (a wrist or
+/// the forearm against a taller product standing beside the one picked,
+/// the forearm folded into the base).
+pub(super) fn contact_blocked(plan: &StagePlan, k: usize, why: Option<&Shortfall>) -> bool {
+    plan.stage == Stage::Picking && k == 1 && matches!(why, Some(Shortfall::Collides { .. }))
+}
 
 /// Whether `why`, the lift's failure (sub-goal 3 of a picking stage),
 /// can come from the shape the arm gripped with: no free way up, rather
