@@ -460,6 +460,19 @@ fn a_contact_beside_a_taller_product_is_gripped_again_with_a_free_shape() {
     assert!(regripped, "{report}");
 }
 
+/// A kiosk's mailer beside the robot base (tests/cells/kiosk.pack, slots
+/// 0.33-0.37 m from its axis). The bundled model's steps towards the
+/// point above a slot spiral in there, each turning the tip's way a few
+/// degrees off, and ended 2.0-2.3 mm away after 30 steps where 2 mm is
+/// needed (a fallback in 19 of the cell's 30 scenarios). Steps that end
+/// within 1 cm now take up to 15 more: no fallback.
+#[test]
+fn steps_that_spiral_in_on_a_slot_near_the_base_are_let_take_a_few_more() {
+    for scenario in ["kiosk_four/04", "kiosk_four/06"] {
+        file_packs_without_fallback("tests/cells/kiosk.pack", scenario);
+    }
+}
+
 /// A cell whose products wait 0.29 m from the base axis
 /// (tests/cells/near_flip.pack). The expert solved each sub-goal nearest
 /// the one before: over one product the contact nearest the hover had
