@@ -77,7 +77,7 @@ struct Reached {
     tips: [[f64; 3]; 3],
 }
 
-/// Which ways [`Learned::rollout_by`] (and [`Learned::way_up`]) try to
+/// Which ways [`Learned::rollout`] (and [`Learned::way_up`]) try to
 /// a goal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Ways {
@@ -133,22 +133,10 @@ impl<W: World> Learned<'_, W> {
 
     /// The dynamics policy's motion from `start` to `goal`: the checked
     /// commands, or why not. The steps' end point is joined straight when
-    /// that is free, else through every step. `first_action_us` gets the
-    /// time of the first policy call.
+    /// that is free, else (with [`Ways::All`]) down the vertical, through
+    /// every step or across at the higher end's height. `first_action_us`
+    /// gets the time of the first policy call.
     fn rollout(
-        &self,
-        start: Joints,
-        goal: [f64; 3],
-        tolerance: f64,
-        load: Load,
-        first_action_us: &mut Option<f64>,
-    ) -> Result<Route, Shortfall> {
-        self.rollout_by(start, goal, tolerance, load, first_action_us, Ways::All)
-    }
-
-    /// [`Learned::rollout`], trying only the `ways` given where the
-    /// steps' end joined straight collides.
-    fn rollout_by(
         &self,
         start: Joints,
         goal: [f64; 3],
@@ -287,6 +275,7 @@ impl<W: World> Learned<'_, W> {
                 tolerance,
                 load,
                 first_action_us,
+                Ways::All,
             )
             .ok()
         })
@@ -313,7 +302,7 @@ impl<W: World> Learned<'_, W> {
         self.raise_heights(goal[2], over)
             .find_map(|z| {
                 let raised = [goal[0], goal[1], z];
-                self.rollout_by(
+                self.rollout(
                     start,
                     raised,
                     tolerance,
@@ -512,7 +501,14 @@ impl<W: World> Learned<'_, W> {
                 let tolerance = tolerance(plan.stage, k);
                 let mut first_action_us = None;
                 // The first attempt's shortfall is the one reported.
-                let mut rolled = self.rollout(start, goal, tolerance, load, &mut first_action_us);
+                let mut rolled = self.rollout(
+                    start,
+                    goal,
+                    tolerance,
+                    load,
+                    &mut first_action_us,
+                    Ways::All,
+                );
                 // A point the product is carried through (the approach,
                 // above the slot) whose motion meets what stands under the
                 // way (a bottle taller than the carrying height) is
@@ -597,7 +593,14 @@ impl<W: World> Learned<'_, W> {
                     && let Some(kept) = plan.inside.and_then(|i| i.keep(not_low))
                     && (kept[0] - goal[0]).hypot(kept[1] - goal[1]) <= KEEP_INSIDE
                     && let Some(route) = self
-                        .rollout(start, kept, BACK_UP_REACHED, load, &mut first_action_us)
+                        .rollout(
+                            start,
+                            kept,
+                            BACK_UP_REACHED,
+                            load,
+                            &mut first_action_us,
+                            Ways::All,
+                        )
                         .ok()
                         .or_else(|| {
                             self.raised(
@@ -632,9 +635,16 @@ impl<W: World> Learned<'_, W> {
                                 && tried.is_none_or(|t| (t[0], t[1]) != (kept[0], kept[1]))
                         })
                         .find_map(|kept| {
-                            self.rollout(start, kept, BACK_UP_REACHED, load, &mut first_action_us)
-                                .ok()
-                                .map(|route| (kept, route))
+                            self.rollout(
+                                start,
+                                kept,
+                                BACK_UP_REACHED,
+                                load,
+                                &mut first_action_us,
+                                Ways::All,
+                            )
+                            .ok()
+                            .map(|route| (kept, route))
                         });
                     if let Some((kept, route)) = found {
                         goals[k] = kept;
@@ -666,8 +676,15 @@ impl<W: World> Learned<'_, W> {
                     let by_m = (kept[0] - aim[0]).hypot(kept[1] - aim[1]);
                     let route = (by_m <= KEEP_INSIDE)
                         .then(|| {
-                            self.rollout(start, kept, BACK_UP_REACHED, load, &mut first_action_us)
-                                .ok()
+                            self.rollout(
+                                start,
+                                kept,
+                                BACK_UP_REACHED,
+                                load,
+                                &mut first_action_us,
+                                Ways::All,
+                            )
+                            .ok()
                         })
                         .flatten();
                     match route {
