@@ -255,6 +255,20 @@ impl<W: World> Learned<'_, W> {
         }
     }
 
+    /// The policy's motion to a release `kept` inside the box's walls
+    /// ([`Inside`]), reached within [`BACK_UP_REACHED`], by any way.
+    fn kept(
+        &self,
+        start: Joints,
+        kept: [f64; 3],
+        load: Load,
+        first_action_us: &mut Option<f64>,
+    ) -> Option<Route> {
+        let reached = BACK_UP_REACHED;
+        self.rollout(start, kept, reached, load, first_action_us, Ways::All)
+            .ok()
+    }
+
     /// The policy's motion to `goal` raised [`RAISE_STEP`] at a time (at
     /// most [`MAX_RAISES`] times, to heights above `above` and no higher
     /// than `ceiling`, while the sub-goal's budget lasts): the first that
@@ -592,26 +606,18 @@ impl<W: World> Learned<'_, W> {
                     && !self.station.late()
                     && let Some(kept) = plan.inside.and_then(|i| i.keep(not_low))
                     && (kept[0] - goal[0]).hypot(kept[1] - goal[1]) <= KEEP_INSIDE
-                    && let Some(route) = self
-                        .rollout(
-                            start,
-                            kept,
-                            BACK_UP_REACHED,
-                            load,
-                            &mut first_action_us,
-                            Ways::All,
-                        )
-                        .ok()
-                        .or_else(|| {
-                            self.raised(
-                                start,
-                                kept,
-                                BACK_UP_REACHED,
-                                load,
-                                (kept[2], ceiling),
-                                &mut first_action_us,
-                            )
-                        })
+                    && let Some(route) =
+                        self.kept(start, kept, load, &mut first_action_us)
+                            .or_else(|| {
+                                self.raised(
+                                    start,
+                                    kept,
+                                    BACK_UP_REACHED,
+                                    load,
+                                    (kept[2], ceiling),
+                                    &mut first_action_us,
+                                )
+                            })
                 {
                     goals[k] = kept;
                     rolled = Ok(route);
@@ -635,16 +641,8 @@ impl<W: World> Learned<'_, W> {
                                 && tried.is_none_or(|t| (t[0], t[1]) != (kept[0], kept[1]))
                         })
                         .find_map(|kept| {
-                            self.rollout(
-                                start,
-                                kept,
-                                BACK_UP_REACHED,
-                                load,
-                                &mut first_action_us,
-                                Ways::All,
-                            )
-                            .ok()
-                            .map(|route| (kept, route))
+                            self.kept(start, kept, load, &mut first_action_us)
+                                .map(|route| (kept, route))
                         });
                     if let Some((kept, route)) = found {
                         goals[k] = kept;
@@ -675,17 +673,7 @@ impl<W: World> Learned<'_, W> {
                 {
                     let by_m = (kept[0] - aim[0]).hypot(kept[1] - aim[1]);
                     let route = (by_m <= KEEP_INSIDE)
-                        .then(|| {
-                            self.rollout(
-                                start,
-                                kept,
-                                BACK_UP_REACHED,
-                                load,
-                                &mut first_action_us,
-                                Ways::All,
-                            )
-                            .ok()
-                        })
+                        .then(|| self.kept(start, kept, load, &mut first_action_us))
                         .flatten();
                     match route {
                         Some(route) => {
