@@ -16,7 +16,7 @@ mod regrip;
 mod steps;
 
 pub use steps::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps, tolerance};
-use steps::{MORE_STEPS, NEAR_MISS, policy_steps_within};
+use steps::{MORE_STEPS, policy_steps_near};
 
 use super::reasoner::{f32s, graph, in_slot, lifted};
 use super::station::{
@@ -147,7 +147,10 @@ impl<W: World> Learned<'_, W> {
     ) -> Result<Route, Shortfall> {
         let s = &self.station;
         let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
-        let steps = policy_steps(
+        // Steps that spiral in on the goal, a little short of it, go on
+        // for a few more (the first shortfall is the one reported).
+        let steps = policy_steps_near(
+            MORE_STEPS,
             arm,
             base,
             suction,
@@ -165,18 +168,6 @@ impl<W: World> Learned<'_, W> {
                 action
             },
         );
-        // Steps that spiral in on the goal, a little short of it: the
-        // same steps, and a few more (the first shortfall is the one
-        // reported).
-        let steps = match steps {
-            Err(why @ Shortfall::Short { distance_m, .. }) if distance_m <= NEAR_MISS => {
-                let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
-                let more = MAX_POLICY_STEPS + MORE_STEPS;
-                policy_steps_within(more, arm, base, suction, start, goal, tolerance, act)
-                    .map_err(|_| why)
-            }
-            other => other,
-        };
         // A goal far round the base the policy fell short of: through a
         // via point half way round, the way the base has room.
         let steps = steps.or_else(|why| {

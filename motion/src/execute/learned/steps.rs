@@ -127,16 +127,7 @@ pub fn policy_steps(
     tolerance: f64,
     action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
 ) -> Result<Vec<Joints>, Shortfall> {
-    policy_steps_within(
-        MAX_POLICY_STEPS,
-        arm,
-        base,
-        suction,
-        start,
-        goal,
-        tolerance,
-        action,
-    )
+    policy_steps_near(0, arm, base, suction, start, goal, tolerance, action)
 }
 
 /// How close (m) the policy's [`MAX_POLICY_STEPS`] steps must have come
@@ -151,10 +142,13 @@ pub const NEAR_MISS: f64 = 0.01;
 /// [`NEAR_MISS`] of its goal, beyond [`MAX_POLICY_STEPS`].
 pub const MORE_STEPS: usize = 15;
 
-/// [`policy_steps`] with at most `max_steps` steps.
+/// [`policy_steps`], going on for up to `more` steps where the first
+/// [`MAX_POLICY_STEPS`] end within [`NEAR_MISS`] of the goal; where those
+/// fall short too (or leave the limits), the shortfall after
+/// [`MAX_POLICY_STEPS`] is the one returned.
 #[allow(clippy::too_many_arguments)]
-pub fn policy_steps_within(
-    max_steps: usize,
+pub fn policy_steps_near(
+    more: usize,
     arm: &Arm,
     base: &Isometry3<f64>,
     suction: f64,
@@ -170,30 +164,45 @@ pub fn policy_steps_within(
     // down, the tip in closed form where the arm has one (forward
     // kinematics was most of a step's own work).
     let mut closed: Option<CupDownTip> = None;
-    let mut steps = Vec::with_capacity(max_steps);
+    let mut steps = Vec::with_capacity(MAX_POLICY_STEPS);
+    // The shortfall after MAX_POLICY_STEPS, once the steps go on.
+    let mut short = None;
     loop {
         let delta: [f64; 3] = std::array::from_fn(|j| goal[j] - tip[j]);
         let away = delta.iter().map(|d| d * d).sum::<f64>().sqrt();
         if away <= tolerance {
             return Ok(steps);
         }
-        if steps.len() >= max_steps {
-            return Err(Shortfall::Short {
-                steps: max_steps,
+        if steps.len() == MAX_POLICY_STEPS {
+            let why = Shortfall::Short {
+                steps: MAX_POLICY_STEPS,
                 distance_m: away,
-            });
+            };
+            if more == 0 || away > NEAR_MISS {
+                return Err(why);
+            }
+            short = Some(why);
+        }
+        if steps.len() == MAX_POLICY_STEPS + more {
+            return Err(short.unwrap_or(Shortfall::Short {
+                steps: steps.len(),
+                distance_m: away,
+            }));
         }
         let step = record::clip(action(&q, delta).map(f64::from));
-        match &closed {
-            Some(c) => {
-                q = within_limits(arm, stepped(&q, step))?;
+        let stepped = match &closed {
+            Some(c) => within_limits(arm, stepped(&q, step)).map(|next| {
+                q = next;
                 tip = c.at(&q).unwrap_or_else(|| arm.tool_tip(base, &q, suction));
-            }
-            None => {
-                (q, flange) = cup_down_from(arm, base, &q, &flange, step)?;
+            }),
+            None => cup_down_from(arm, base, &q, &flange, step).map(|(next, after)| {
+                (q, flange) = (next, after);
                 tip = Arm::tip_of(&flange, suction);
                 closed = arm.cup_down_tip(base, &q, &tip);
-            }
+            }),
+        };
+        if let Err(why) = stepped {
+            return Err(short.unwrap_or(why));
         }
         steps.push(q);
     }
