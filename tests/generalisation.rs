@@ -460,6 +460,32 @@ fn a_contact_beside_a_taller_product_is_gripped_again_with_a_free_shape() {
     assert!(regripped, "{report}");
 }
 
+/// After the bakery's regrip (above) the arm holds the product with the
+/// elbow below or the wrist flipped, a shape the policy was not taught
+/// in: its steps towards the box folded the forearm into wrist 2, and
+/// RRT-Connect took the approach (a second fallback for the product). The
+/// approach now follows the policy's steps from the taught shape's joints
+/// for the same pose, the arm changing its shape on the way: the regrip
+/// is the only fallback.
+#[test]
+fn after_a_regrip_the_arm_changes_its_shape_on_the_way_to_the_box() {
+    for scenario in ["bakery_four/01", "bakery_four/09"] {
+        let report = executes_file("tests/cells/bakery.pack", scenario);
+        assert_eq!(report["complete"], true, "{report}");
+        let fallbacks = report["fallbacks"].as_array().cloned().unwrap_or_default();
+        assert!(
+            fallbacks
+                .iter()
+                .any(|f| f["stage"] == "picking" && f["expert_from"] == 1),
+            "{report}"
+        );
+        assert!(
+            fallbacks.iter().all(|f| f["stage"] == "picking"),
+            "{report}"
+        );
+    }
+}
+
 /// A kiosk's mailer beside the robot base (tests/cells/kiosk.pack, slots
 /// 0.33-0.37 m from its axis). The bundled model's steps towards the
 /// point above a slot spiral in there, each turning the tip's way a few

@@ -31,6 +31,12 @@ use super::{Arm, DOF, Joints, Limits};
 /// of the target.
 pub const IK_TOLERANCE: f64 = 1e-9;
 
+/// How close (sum of squared joint differences, rad²) a branch's solution
+/// must be to joints for them to be on that branch ([`Arm::ur_branch`]):
+/// the solutions are exact to about 1e-9 rad, and two branches are this
+/// close only at a singular pose, where either is right.
+const BRANCH_TOLERANCE: f64 = 1e-12;
+
 /// The world flange pose that puts the cup tip at `tip`, pointing straight
 /// down, with the flange x axis at `yaw` from world x.
 pub fn tool_down_pose(tip: Point3<f64>, yaw: f64, suction: f64) -> Isometry3<f64> {
@@ -203,6 +209,17 @@ impl Arm {
         near: &Joints,
     ) -> [Option<Joints>; 8] {
         self.ur_branches(base, flange, near, &self.limits)
+    }
+
+    /// Which closed-form branch (the index of [`Arm::ur_ik_branches`]:
+    /// shoulder, wrist, elbow) joints `q` are on: the branch whose
+    /// solution for `q`'s own flange pose is `q`. `None` on a non-UR arm,
+    /// or where no branch's solution is `q` (outside the limits).
+    pub fn ur_branch(&self, base: &Isometry3<f64>, q: &Joints) -> Option<usize> {
+        let flange = self.flange_pose(base, q);
+        self.ur_ik_branches(base, &flange, q)
+            .iter()
+            .position(|s| s.is_some_and(|s| joint_distance(&s, q) < BRANCH_TOLERANCE))
     }
 
     /// [`Arm::ur_ik_branches`] within the given limits.

@@ -124,6 +124,31 @@ fn ik_picks_the_branch_nearest_to_near() {
     assert!(branches_seen > 2_000 * 6, "{branches_seen}");
 }
 
+/// Every branch's solution is found on that branch: `ur_branch` names
+/// the index `ur_ik_branches` gave it, for random tool-down targets.
+#[test]
+fn each_branch_solution_is_on_its_branch() {
+    let arm = Arm::ur10();
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut named = 0;
+    for _ in 0..500 {
+        let q = tool_down_joints(&arm, &mut rng);
+        let target = arm.flange_pose(&base(), &q);
+        let near = random_joints(&arm, &mut rng);
+        for (i, b) in arm
+            .ur_ik_branches(&base(), &target, &near)
+            .iter()
+            .enumerate()
+        {
+            if let Some(b) = b {
+                assert_eq!(arm.ur_branch(&base(), b), Some(i), "{b:?}");
+                named += 1;
+            }
+        }
+    }
+    assert!(named > 500 * 6, "{named}");
+}
+
 #[test]
 fn yaw_free_ik_keeps_the_last_joint_still() {
     let arm = Arm::ur10();

@@ -20,7 +20,7 @@ use steps::{MORE_STEPS, policy_steps_near};
 
 use super::reasoner::{f32s, graph, in_slot, lifted};
 use super::station::{
-    Connect, Leg, Load, MAX_CARRY_RAISES, MAX_RAISES, PlanningBudget, RAISE_STEP, Route,
+    Connect, Leg, Load, MAX_CARRY_RAISES, MAX_RAISES, PlanningBudget, RAISE_STEP, READY, Route,
     SUCCESS_RADIUS, Station, Unchecked, judge, leg_end, raises,
 };
 use super::{checked_samples, expected_next};
@@ -38,6 +38,7 @@ use packwright_interface::outcome::{
 use packwright_interface::{Graph, OrderTask, Policy, SequenceRule, SubGoalQuery, World};
 use packwright_kinematics::body::wrist_around_tool;
 use packwright_kinematics::{Arm, Joints};
+use std::f64::consts::TAU;
 use std::time::Instant;
 use steps::BACK_UP_REACHED;
 
@@ -244,6 +245,55 @@ impl<W: World> Learned<'_, W> {
                     .ok_or_else(|| why(straight))
             }
         }
+    }
+
+    /// A stage's first motion from an arm on another inverse-kinematics
+    /// branch than the policy was taught on: the policy's steps from the
+    /// taught branch's joints for `start`'s flange pose, their end reached
+    /// from `start` by the straight joint motion or a swing
+    /// ([`Station::route`]), or `start` brought to those joints where it
+    /// stands and the steps followed from there. A regrip's contact shape
+    /// (the wrist flipped, or the elbow below, to grip beside a taller
+    /// product) leaves the arm on another branch, where the policy's steps
+    /// fold the forearm into wrist 2 over the box; the arm changes its
+    /// shape on the way, as it does to the expert's inverse-kinematics
+    /// solution. `None` on the taught branch (nothing is tried), a non-UR
+    /// arm, or where neither way is free.
+    fn reshaped(&self, start: Joints, goal: [f64; 3], tolerance: f64, load: Load) -> Option<Route> {
+        let s = &self.station;
+        let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
+        let taught = arm.ur_branch(base, &arm.from_ur_convention(&READY))?;
+        if arm.ur_branch(base, &start)? == taught {
+            return None;
+        }
+        let flange = arm.flange_pose(base, &start);
+        let from = arm.ur_ik_branches(base, &flange, &start)[taught]?;
+        let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
+        let steps =
+            policy_steps_near(MORE_STEPS, arm, base, suction, from, goal, tolerance, act).ok()?;
+        let last = steps.last().copied().unwrap_or(from);
+        let end = arm.into_limits(&held_at_limits(arm, &from, last), &from)?;
+        let end = with_room(arm, &from, end);
+        // Wrist 1 either way round: turning it the shorter way can fold
+        // wrist 2 into the forearm as the wrist flips.
+        let turns = [0.0, -TAU, TAU].map(|t| {
+            let mut turned = [from, end];
+            turned.iter_mut().for_each(|q| q[3] += t);
+            turned
+        });
+        turns
+            .into_iter()
+            .filter(|[from, end]| arm.within_limits(from) && arm.within_limits(end))
+            .find_map(|[from, end]| {
+                s.route(Connect::Straight, 0, start, end, load)
+                    .ok()
+                    .or_else(|| {
+                        let waypoints = vec![from, end];
+                        checked_samples(arm, &s.checker, start, &waypoints, load)
+                            .ok()
+                            .map(|samples| Route { waypoints, samples })
+                    })
+            })
     }
 
     /// The policy's motion to a release `kept` inside the box's walls
@@ -525,6 +575,15 @@ impl<W: World> Learned<'_, W> {
                 // onto the top face is then longer. The expert goes there
                 // with another arm shape instead, which the policy's
                 // steps, keeping the start's shape, cannot reach.
+                // A stage's first motion from an arm a regrip left on
+                // another shape than the policy was taught in: the arm
+                // changes its shape on the way.
+                if k == 0
+                    && rolled.is_err()
+                    && let Some(route) = self.reshaped(start, goal, tolerance, load)
+                {
+                    rolled = Ok(route);
+                }
                 let raisable = plan.stage == Stage::Placing || k == 0;
                 if switch == Suction::Keep
                     && raisable
