@@ -766,6 +766,26 @@ impl<W: World> Learned<'_, W> {
                     // again from its start instead, as for a lift with no
                     // way up.
                     let shape_blocked = regrip::contact_blocked(plan, k, why.as_ref());
+                    // First with a free shape at the learned sub-goals,
+                    // the arm changing its shape at the learned hover
+                    // (not a fallback).
+                    if shape_blocked
+                        && !self.station.late()
+                        && let Some(hover) = legs.get(pending_legs).map(|l| &l.route)
+                        && let Some((gripped, lift)) = self.grip_learned(plan, from, hover, goal)
+                    {
+                        let elapsed = self.station.spend(k + 1, started)?;
+                        self.station.timing.subgoal(kind, elapsed * 1e6);
+                        legs.truncate(pending_legs);
+                        self.station.subgoals.truncate(subgoals_before);
+                        for (i, (leg, end)) in gripped.into_iter().enumerate() {
+                            tips[i] = self.station.tip(&end);
+                            self.station.subgoals.push(tips[i]);
+                            legs.push(leg);
+                        }
+                        goals[2] = lift;
+                        break 'subgoals;
+                    }
                     if let Some(why) = why {
                         self.fallbacks.push(Fallback {
                             product: plan.product.to_owned(),

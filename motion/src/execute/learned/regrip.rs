@@ -4,25 +4,33 @@
 //! to the base can be gripped with the forearm folded so far that every
 //! way up folds it into the base or the upper arm, where the expert,
 //! solving the contact by inverse kinematics, grips with another shape.
-//! When the lift from the learned contact fails, the picking stage is
-//! planned again from its start by the expert's sub-goals, with the
-//! first contact shape (nearest the start first) from which the descent
-//! and the lift are free (`Station::grip`, which the expert and
-//! RRT-Connect use alike). So is a learned contact that collides (wrist 1
-//! against a 270 mm bottle standing beside the product picked, the
-//! forearm folded into the base): RRT-Connect from the learned hover
-//! would change the arm's shape down among the products and leave the
-//! lift in a shape the next stage's steps cannot follow.
+//! A learned contact that collides (wrist 1 against a 270 mm bottle
+//! standing beside the product picked, the forearm folded into the
+//! base) is made with the first contact shape (nearest the start first)
+//! from which the descent and the lift are free (`Station::grip`, which
+//! the expert and RRT-Connect use alike), at the learned sub-goals, the
+//! arm changing its shape on the way to the hover ([`Learned::grip_learned`]).
+//! RRT-Connect from the learned hover would change the arm's shape down
+//! among the products and leave the lift in a shape the next stage's
+//! steps cannot follow. Where no shape is free that way, or the lift
+//! from the learned contact fails, the picking stage is planned again
+//! from its start by the expert's sub-goals (a fallback).
 //!
 //! Invariant: every route returned is checked as it will be sent, with
 //! the load of its leg; nothing is sent here.
 
 use super::{Learned, StagePlan};
-use crate::execute::station::{Connect, Leg, Load};
-use crate::expert::schedule;
-use packwright_interface::World;
+use crate::execute::checked_samples;
+use crate::execute::reasoner::f32s;
+use crate::execute::station::{Connect, Leg, Load, Route};
+use crate::expert::{SubGoal, schedule};
 use packwright_interface::outcome::{Failure, Shortfall, Stage};
+use packwright_interface::{SubGoalQuery, World};
 use packwright_kinematics::Joints;
+
+/// A picking stage's three legs (hover, contact, lift), each with the
+/// joints it ends at.
+pub(super) type StageLegs = [(Leg, Joints); 3];
 
 /// Whether `why`, the learned motion's shortfall at sub-goal `k + 1` of
 /// a picking stage, is a contact that collides: the shape the policy's
@@ -46,13 +54,86 @@ pub(super) fn lift_blocked(plan: &StagePlan, k: usize, why: &Failure) -> bool {
 }
 
 impl<W: World> Learned<'_, W> {
+    /// A learned contact that collides in the shape the policy's steps
+    /// kept, gripped with a free shape at the learned sub-goals instead:
+    /// [`Station::grip`](crate::execute::station::Station::grip) at the
+    /// hover the steps reached (`hover`, its motion from `from`), the
+    /// learned `contact` and the sub-goal planner's lift from there. The
+    /// arm changes its shape at the hover (the learned motion there, then
+    /// on to the same cup pose in the free shape, checked as one motion),
+    /// or on the way to it (the straight motion or a swing from `from`);
+    /// the descent and the lift are the straight ones `grip` checked.
+    /// Neither RRT-Connect nor an expert's sub-goal: not a fallback. The
+    /// three legs with the joints each ends at, and the lift's sub-goal;
+    /// `None` when no shape is free that way.
+    pub(super) fn grip_learned(
+        &self,
+        plan: &StagePlan,
+        from: Joints,
+        hover: &Route,
+        contact: [f64; 3],
+    ) -> Option<(StageLegs, [f64; 3])> {
+        let s = &self.station;
+        let (size, top) = (plan.gripped?, plan.contact?);
+        let reached = *hover.waypoints.last()?;
+        let lift = self
+            .policy
+            .subgoal(&SubGoalQuery {
+                stage: Stage::Picking,
+                index: 2,
+                feature: f32s(plan.feature),
+                tool: f32s(contact),
+                height: plan.height as f32,
+                base: f32s(s.task.cell.base),
+            })
+            .map(f64::from);
+        if lift.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let switches = schedule(Stage::Picking);
+        let goals = [s.tip(&reached), contact, lift];
+        let goals: [SubGoal; 3] = std::array::from_fn(|i| SubGoal {
+            tip: goals[i],
+            suction: switches[i],
+        });
+        let free = plan.load;
+        let guarded = free.guarded(s.task.cell.descent);
+        let held = |at: &Joints| self.gripped_at(at, plan, size, top);
+        let [over, at, up] = s.grip(&goals, &from, 0.0, [free, guarded], &held)?;
+        let gripped = held(&at.joints);
+        let carrying = Load::holding(&gripped);
+        let over = over.joints;
+        let mut waypoints = hover.waypoints.clone();
+        waypoints.push(over);
+        let to = s
+            .route(Connect::Straight, 1, from, over, free)
+            .ok()
+            .or_else(|| {
+                checked_samples(s.arm, &s.checker, from, &waypoints, free)
+                    .ok()
+                    .map(|samples| Route { waypoints, samples })
+            })?;
+        let how = Connect::Straight;
+        let (at, down) = s.route_solved(how, 2, over, at, 0.0, guarded).ok()?;
+        let (raised, up) = s.route_solved(how, 3, at, up, 0.0, carrying).ok()?;
+        let [over_switch, contact_switch, lift_switch] = switches;
+        Some((
+            [
+                (Leg::new(to, over_switch, free), over),
+                (Leg::new(down, contact_switch, guarded), at),
+                (Leg::new(up, lift_switch, carrying), raised),
+            ],
+            lift,
+        ))
+    }
+
     /// The picking stage `plan` from `from` by the expert's sub-goals
     /// ([`Station::grip`](crate::execute::station::Station::grip)): the
     /// hover (RRT-Connect from `from`), the guarded descent onto the
     /// product and the lift, each leg with the joints it ends at. `None`
     /// when no contact shape has a free way down and up, or the hover of
     /// that shape is not reached.
-    pub(super) fn regrip(&self, plan: &StagePlan, from: Joints) -> Option<[(Leg, Joints); 3]> {
+    pub(super) fn regrip(&self, plan: &StagePlan, from: Joints) -> Option<StageLegs> {
         let s = &self.station;
         let (size, top) = (plan.gripped?, plan.contact?);
         let [over_switch, contact_switch, lift_switch] = schedule(Stage::Picking);
