@@ -564,6 +564,15 @@ impl<W: World> Learned<'_, W> {
                     &mut first_action_us,
                     Ways::All,
                 );
+                // A stage's first motion from an arm a regrip left on
+                // another shape than the policy was taught in: the arm
+                // changes its shape on the way.
+                if k == 0
+                    && rolled.is_err()
+                    && let Some(route) = self.reshaped(start, goal, tolerance, load)
+                {
+                    rolled = Ok(route);
+                }
                 // A point the product is carried through (the approach,
                 // above the slot) whose motion meets what stands under the
                 // way (a bottle taller than the carrying height) is
@@ -575,15 +584,6 @@ impl<W: World> Learned<'_, W> {
                 // onto the top face is then longer. The expert goes there
                 // with another arm shape instead, which the policy's
                 // steps, keeping the start's shape, cannot reach.
-                // A stage's first motion from an arm a regrip left on
-                // another shape than the policy was taught in: the arm
-                // changes its shape on the way.
-                if k == 0
-                    && rolled.is_err()
-                    && let Some(route) = self.reshaped(start, goal, tolerance, load)
-                {
-                    rolled = Ok(route);
-                }
                 let raisable = plan.stage == Stage::Placing || k == 0;
                 if switch == Suction::Keep
                     && raisable
@@ -767,8 +767,8 @@ impl<W: World> Learned<'_, W> {
                     // way up.
                     let shape_blocked = regrip::contact_blocked(plan, k, why.as_ref());
                     // First with a free shape at the learned sub-goals,
-                    // the arm changing its shape at the learned hover
-                    // (not a fallback).
+                    // the arm changing its shape on the way to the
+                    // learned hover (not a fallback).
                     if shape_blocked
                         && !self.station.late()
                         && let Some(hover) = legs.get(pending_legs).map(|l| &l.route)
