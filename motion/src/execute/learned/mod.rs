@@ -769,10 +769,11 @@ impl<W: World> Learned<'_, W> {
                     // First with a free shape at the learned sub-goals,
                     // the arm changing its shape on the way to the
                     // learned hover (not a fallback).
-                    if shape_blocked
+                    if (shape_blocked || regrip::lift_collides(plan, k, why.as_ref()))
                         && !self.station.late()
                         && let Some(hover) = legs.get(pending_legs).map(|l| &l.route)
-                        && let Some((gripped, lift)) = self.grip_learned(plan, from, hover, goal)
+                        && let Some((gripped, lift)) =
+                            self.grip_learned(plan, from, hover, goals[1])
                     {
                         let elapsed = self.station.spend(k + 1, started)?;
                         self.station.timing.subgoal(kind, elapsed * 1e6);

@@ -6,15 +6,16 @@
 //! solving the contact by inverse kinematics, grips with another shape.
 //! A learned contact that collides (wrist 1 against a 270 mm bottle
 //! standing beside the product picked, the forearm folded into the
-//! base) is made with the first contact shape (nearest the start first)
+//! base), or a learned lift that does (every way up from a product close
+//! to the base folds the forearm into the base), is made with the first contact shape (nearest the start first)
 //! from which the descent and the lift are free (`Station::grip`, which
 //! the expert and RRT-Connect use alike), at the learned sub-goals, the
 //! arm changing its shape on the way to the hover ([`Learned::grip_learned`]).
 //! RRT-Connect from the learned hover would change the arm's shape down
 //! among the products and leave the lift in a shape the next stage's
-//! steps cannot follow. Where no shape is free that way, or the lift
-//! from the learned contact fails, the picking stage is planned again
-//! from its start by the expert's sub-goals (a fallback).
+//! steps cannot follow. Where no shape is free that way (and, for a
+//! lift, RRT-Connect finds no way up either), the picking stage is
+//! planned again from its start by the expert's sub-goals (a fallback).
 //!
 //! Invariant: every route returned is checked as it will be sent, with
 //! the load of its leg; nothing is sent here.
@@ -39,6 +40,17 @@ pub(super) type StageLegs = [(Leg, Joints); 3];
 /// the forearm folded into the base).
 pub(super) fn contact_blocked(plan: &StagePlan, k: usize, why: Option<&Shortfall>) -> bool {
     plan.stage == Stage::Picking && k == 1 && matches!(why, Some(Shortfall::Collides { .. }))
+}
+
+/// Whether `why`, the learned motion's shortfall at sub-goal `k + 1` of
+/// a picking stage, is a lift that collides: from the contact the
+/// policy's steps reached in the shape kept from the stage's start, the
+/// way up folds the forearm into the base or the upper arm (a product
+/// close to the base).
+pub(super) fn lift_collides(plan: &StagePlan, k: usize, why: Option<&Shortfall>) -> bool {
+    plan.stage == Stage::Picking
+        && k + 1 == schedule(Stage::Picking).len()
+        && matches!(why, Some(Shortfall::Collides { .. }))
 }
 
 /// Whether `why`, the lift's failure (sub-goal 3 of a picking stage),
