@@ -378,8 +378,13 @@ impl Resolver<'_> {
         if let Some(z) = p.z.as_ref().filter(|z| z.metres != 0.0) {
             self.errors.push(Error::BadGeometry {
                 at: Loc::new(f, z.span),
-                what: "this position is on the table, at z = 0".into(),
-                fix: "write `(x, y)` or `(x, y, 0)`: products stand on the table and box floors lie on it".into(),
+                what: format!(
+                    "a position on the table must be at z = 0, not at z = {} m",
+                    z.metres
+                ),
+                fix: "write `(x, y)` or `(x, y, 0)`: products stand on the table and box floors lie on it; \
+                      heights are measured from the table, and a robot on a riser has its `base` higher"
+                    .into(),
             });
         }
         xy(p)
