@@ -22,6 +22,9 @@ pub enum Warning {
         /// The product met (by the nearest arm pose that meets one), with
         /// its place and its entry.
         by: Option<(String, [f64; 2], Loc)>,
+        /// Whether an order or a generator packs the product met (else it
+        /// stands there in every package).
+        by_packed: bool,
     },
     /// Two products placed in neighbouring slots with less room between
     /// them than the planner keeps round a held product
@@ -126,9 +129,17 @@ impl Warning {
             Warning::PickBlocked {
                 product,
                 by: Some((other, ..)),
+                by_packed: true,
                 ..
             } => format!(
                 "a package packs `{product}` only once `{other}` is gone: put `{other}` before it in the order's sequence, or move the two further apart"
+            ),
+            Warning::PickBlocked {
+                by: Some((other, ..)),
+                by_packed: false,
+                ..
+            } => format!(
+                "no order or generator packs `{other}`, so it stands there in every package: move the two further apart, or take `{other}` out of the inventory"
             ),
             Warning::PickBlocked { product, .. } => format!(
                 "a package packs `{product}` only once the products beside it are gone: pack those first, or give it more room"

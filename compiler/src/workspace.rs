@@ -439,9 +439,12 @@ fn standing(
             .map(|(j, s)| (*s, j))
             .unzip();
         if let Some(b) = ws.pick_among(m, inv.cell, e.product, e.at, &others) {
-            let by = b.by.and_then(|b| index.get(b)).map(|&j| {
-                let other = &inv.entries[j];
-                (name(j), other.at, other.loc)
+            let met =
+                b.by.and_then(|b| index.get(b))
+                    .map(|&j| (j, &inv.entries[j]));
+            let by = met.map(|(j, other)| (name(j), other.at, other.loc));
+            let by_packed = met.is_some_and(|(_, o)| {
+                picked.get(&(inv.cell, o.product, o.at.map(f64::to_bits))) == Some(&true)
             });
             warnings.push(Warning::PickBlocked {
                 at: e.loc,
@@ -449,6 +452,7 @@ fn standing(
                 position: e.at,
                 pose: b.pose,
                 by,
+                by_packed,
             });
         }
     }
