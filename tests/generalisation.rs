@@ -457,6 +457,30 @@ fn a_contact_beside_a_taller_product_is_made_with_a_free_shape_at_the_learned_su
     }
 }
 
+/// A spirits gift box behind a row of 260 mm bottle cartons
+/// (tests/cells/spirits.pack). In smalls_only_2of3/03 the pourer's
+/// learned release beside the gin collides, and RRT-Connect goes to the
+/// expert's release, in an arm shape the policy was not taught in (a
+/// fallback). The back-up from there followed the policy's steps up,
+/// which folded the forearm into wrist 2 at every height, and searched
+/// ever higher for a free end: it rose half a metre (11.07 s of
+/// execution for the product, 0.9 s of planning). It now goes up to the
+/// inverse-kinematics solution in the arm's own shape (9.32 s).
+#[test]
+fn the_back_up_from_a_shape_the_policy_was_not_taught_in_goes_straight_up() {
+    let report = executes_file("tests/cells/spirits.pack", "smalls_only_2of3/03");
+    assert_eq!(report["complete"], true, "{report}");
+    let pourer = report["products"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .find(|p| p["product"] == "pourer")
+        .cloned()
+        .unwrap_or_default();
+    let seconds = pourer["execution_s"].as_f64().unwrap_or(f64::INFINITY);
+    assert!(seconds < 10.0, "{pourer}");
+}
+
 /// A kiosk's mailer beside the robot base (tests/cells/kiosk.pack, slots
 /// 0.33-0.37 m from its axis). The bundled model's steps towards the
 /// point above a slot spiral in there, each turning the tip's way a few

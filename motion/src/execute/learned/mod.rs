@@ -923,11 +923,31 @@ impl<W: World> Learned<'_, W> {
         )
         .ok()
         .and_then(|steps| s.arm.into_limits(steps.last()?, &start));
+        let solved = || {
+            s.solve(&up, 1, &start, 0.0, load, z)
+                .map(|solved| solved.joints)
+        };
         let target = match stepped {
             Some(q) => q,
-            None => s.solve(&up, 1, &start, 0.0, load, z)?.joints,
+            None => solved()?,
         };
-        match s.checked(1, start, &[target], load) {
+        let straight = s.checked(1, start, &[target], load).or_else(|why| {
+            // Steps from an arm a fallback left on another shape than the
+            // policy was taught in can fold the forearm into wrist 2 (the
+            // expert's release beside a tall bottle, wrist flipped): up
+            // to the solution nearest the start instead, in the start's
+            // own shape. Searching ever higher for a free end of the
+            // steps took 0.9 s there.
+            match stepped {
+                Some(_) => solved()
+                    .ok()
+                    .filter(|q| *q != target)
+                    .and_then(|q| s.checked(1, start, &[q], load).ok())
+                    .ok_or(why),
+                None => Err(why),
+            }
+        });
+        match straight {
             Ok(route) => Ok(route),
             Err(straight) if ways == Ways::Straight => Err(straight),
             // A straight joint motion bows sideways; from a slot near a
