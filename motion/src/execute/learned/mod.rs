@@ -764,11 +764,12 @@ impl<W: World> Learned<'_, W> {
                     // among the products, and leave the lift in a shape
                     // the next stage's steps cannot follow. The stage
                     // again from its start instead, as for a lift with no
-                    // way up.
+                    // way up: first with a free grip shape at the learned
+                    // sub-goals, the arm changing its shape on the way to
+                    // the learned hover (not a fallback; so is a learned
+                    // lift that collides), else by the expert's
+                    // sub-goals (a fallback, below).
                     let shape_blocked = regrip::contact_blocked(plan, k, why.as_ref());
-                    // First with a free shape at the learned sub-goals,
-                    // the arm changing its shape on the way to the
-                    // learned hover (not a fallback).
                     if (shape_blocked || regrip::lift_collides(plan, k, why.as_ref()))
                         && !self.station.late()
                         && let Some(hover) = legs.get(pending_legs).map(|l| &l.route)
