@@ -442,6 +442,20 @@ impl Resolver<'_> {
                 }
                 ast::CellStmt::Base(p) => {
                     let z = p.z.as_ref().map_or(0.0, |z| z.metres);
+                    // A base below the table puts the arm inside it: every
+                    // pose would collide, and the reach check would only
+                    // say that the start pose cannot be reached.
+                    if let Some(at) = p.z.as_ref().filter(|z| z.metres < 0.0) {
+                        self.errors.push(Error::BadGeometry {
+                            at: Loc::new(f, at.span),
+                            what: format!(
+                                "the robot's base is {} m below the table; it must stand on the table or on a riser (z ≥ 0)",
+                                -z
+                            ),
+                            fix: "heights are measured from the table top, where the products stand: write `base (x, y)` for a robot on the table, or `base (x, y, h)` with h > 0 for one on a riser".into(),
+                        });
+                        ok = false;
+                    }
                     base.set([p.x.metres, p.y.metres, z], sl, &mut self.errors);
                 }
                 ast::CellStmt::Suction(l) => {
