@@ -457,6 +457,24 @@ fn a_contact_beside_a_taller_product_is_made_with_a_free_shape_at_the_learned_su
     }
 }
 
+/// A sauce line's feed row of 240 mm bottles and 40 mm tins
+/// (tests/cells/sauce_row.pack). In row_3of6/04 the learned contact on
+/// the mustard tin between two bottles collides and no grip shape is
+/// free at the learned sub-goals: the picking stage is planned again by
+/// the expert's sub-goals, gripping with a free shape (a fallback from
+/// sub-goal 1), and the package is complete.
+#[test]
+fn where_no_shape_is_free_at_the_learned_contact_the_expert_grips_again() {
+    let report = executes_file("tests/cells/sauce_row.pack", "row_3of6/04");
+    assert_eq!(report["complete"], true, "{report}");
+    let regripped = report["fallbacks"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .any(|f| f["stage"] == "picking" && f["subgoal"] == 2 && f["expert_from"] == 1);
+    assert!(regripped, "{report}");
+}
+
 /// A spirits gift box behind a row of 260 mm bottle cartons
 /// (tests/cells/spirits.pack). In smalls_only_2of3/03 the pourer's
 /// learned release beside the gin collides, and RRT-Connect goes to the
