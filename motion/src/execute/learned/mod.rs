@@ -778,13 +778,7 @@ impl<W: World> Learned<'_, W> {
                     {
                         let elapsed = self.station.spend(k + 1, started)?;
                         self.station.timing.subgoal(kind, elapsed * 1e6);
-                        legs.truncate(pending_legs);
-                        self.station.subgoals.truncate(subgoals_before);
-                        for (i, (leg, end)) in gripped.into_iter().enumerate() {
-                            tips[i] = self.station.tip(&end);
-                            self.station.subgoals.push(tips[i]);
-                            legs.push(leg);
-                        }
+                        tips = self.replan(&mut legs, pending_legs, subgoals_before, gripped);
                         goals[2] = lift;
                         break 'subgoals;
                     }
@@ -839,14 +833,8 @@ impl<W: World> Learned<'_, W> {
                     };
                     let elapsed = self.station.spend(k + 1, started)?;
                     self.station.timing.subgoal(kind, elapsed * 1e6);
-                    legs.truncate(pending_legs);
-                    self.station.subgoals.truncate(subgoals_before);
-                    for (i, (leg, end)) in regripped.into_iter().enumerate() {
-                        goals[i] = plan.expert[i].tip;
-                        tips[i] = self.station.tip(&end);
-                        self.station.subgoals.push(tips[i]);
-                        legs.push(leg);
-                    }
+                    tips = self.replan(&mut legs, pending_legs, subgoals_before, regripped);
+                    goals = plan.expert.each_ref().map(|g| g.tip);
                     if let Some(f) = self.fallbacks.last_mut()
                         && f.product == plan.product
                         && f.stage == plan.stage
@@ -870,6 +858,27 @@ impl<W: World> Learned<'_, W> {
         }
         let tail = self.station.send_legs(legs, keep_tail)?;
         Ok((Reached { goals, tips }, tail))
+    }
+
+    /// The picking stage's legs after the first `pending` replaced by
+    /// `gripped` (hover, contact, lift: a stage planned again from its
+    /// start), and its sub-goals after the first `subgoals_before` by
+    /// where those legs end: the cup tip at each.
+    fn replan(
+        &mut self,
+        legs: &mut Vec<Leg>,
+        pending: usize,
+        subgoals_before: usize,
+        gripped: regrip::StageLegs,
+    ) -> [[f64; 3]; 3] {
+        legs.truncate(pending);
+        self.station.subgoals.truncate(subgoals_before);
+        gripped.map(|(leg, end)| {
+            let tip = self.station.tip(&end);
+            self.station.subgoals.push(tip);
+            legs.push(leg);
+            tip
+        })
     }
 
     /// The product `plan` picks, of `size`, whose top face is at height

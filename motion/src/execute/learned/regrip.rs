@@ -89,7 +89,6 @@ impl<W: World> Learned<'_, W> {
         contact: [f64; 3],
     ) -> Option<(StageLegs, [f64; 3])> {
         let s = &self.station;
-        let (size, top) = (plan.gripped?, plan.contact?);
         let reached = *hover.waypoints.last()?;
         let lift = self
             .policy
@@ -106,40 +105,13 @@ impl<W: World> Learned<'_, W> {
             return None;
         }
         let switches = schedule(Stage::Picking);
-        let goals = [s.tip(&reached), contact, lift];
+        let tips = [s.tip(&reached), contact, lift];
         let goals: [SubGoal; 3] = std::array::from_fn(|i| SubGoal {
-            tip: goals[i],
+            tip: tips[i],
             suction: switches[i],
         });
-        let free = plan.load;
-        let guarded = free.guarded(s.task.cell.descent);
-        let held = |at: &Joints| self.gripped_at(at, plan, size, top);
-        let [over, at, up] = s.grip(&goals, &from, 0.0, [free, guarded], &held)?;
-        let gripped = held(&at.joints);
-        let carrying = Load::holding(&gripped);
-        let over = over.joints;
-        let mut waypoints = hover.waypoints.clone();
-        waypoints.push(over);
-        let to = s
-            .route(Connect::Straight, 1, from, over, free)
-            .ok()
-            .or_else(|| {
-                checked_samples(s.arm, &s.checker, from, &waypoints, free)
-                    .ok()
-                    .map(|samples| Route { waypoints, samples })
-            })?;
-        let how = Connect::Straight;
-        let (at, down) = s.route_solved(how, 2, over, at, 0.0, guarded).ok()?;
-        let (raised, up) = s.route_solved(how, 3, at, up, 0.0, carrying).ok()?;
-        let [over_switch, contact_switch, lift_switch] = switches;
-        Some((
-            [
-                (Leg::new(to, over_switch, free), over),
-                (Leg::new(down, contact_switch, guarded), at),
-                (Leg::new(up, lift_switch, carrying), raised),
-            ],
-            lift,
-        ))
+        let legs = self.gripped_stage(plan, from, &goals, Connect::Straight, Some(hover))?;
+        Some((legs, lift))
     }
 
     /// The picking stage `plan` from `from` by the expert's sub-goals
@@ -149,18 +121,41 @@ impl<W: World> Learned<'_, W> {
     /// when no contact shape has a free way down and up, or the hover of
     /// that shape is not reached.
     pub(super) fn regrip(&self, plan: &StagePlan, from: Joints) -> Option<StageLegs> {
+        let how = Connect::Rrt { seed: self.seed };
+        self.gripped_stage(plan, from, &plan.expert, how, None)
+    }
+
+    /// The picking stage `plan` from `from` at `goals` (hover, contact,
+    /// lift), gripping with the first contact shape `Station::grip` finds
+    /// free: the hover of that shape reached from `from` by `how`, else
+    /// (with the `hover` motion the learned steps made) along that motion
+    /// and on to it, checked as one motion; the descent and the lift by
+    /// `how` from the solves `grip` checked.
+    fn gripped_stage(
+        &self,
+        plan: &StagePlan,
+        from: Joints,
+        goals: &[SubGoal; 3],
+        how: Connect,
+        hover: Option<&Route>,
+    ) -> Option<StageLegs> {
         let s = &self.station;
         let (size, top) = (plan.gripped?, plan.contact?);
         let [over_switch, contact_switch, lift_switch] = schedule(Stage::Picking);
         let free = plan.load;
         let guarded = free.guarded(s.task.cell.descent);
         let held = |at: &Joints| self.gripped_at(at, plan, size, top);
-        let [over, at, up] = s.grip(&plan.expert, &from, 0.0, [free, guarded], &held)?;
+        let [over, at, up] = s.grip(goals, &from, 0.0, [free, guarded], &held)?;
         let gripped = held(&at.joints);
         let carrying = Load::holding(&gripped);
-        let how = Connect::Rrt { seed: self.seed };
         let over = over.joints;
-        let to = s.route(how, 1, from, over, free).ok()?;
+        let to = s.route(how, 1, from, over, free).ok().or_else(|| {
+            let mut waypoints = hover?.waypoints.clone();
+            waypoints.push(over);
+            checked_samples(s.arm, &s.checker, from, &waypoints, free)
+                .ok()
+                .map(|samples| Route { waypoints, samples })
+        })?;
         let (at, down) = s.route_solved(how, 2, over, at, 0.0, guarded).ok()?;
         let (raised, up) = s.route_solved(how, 3, at, up, 0.0, carrying).ok()?;
         Some([
