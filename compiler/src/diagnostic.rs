@@ -22,20 +22,21 @@ use unicode_width::UnicodeWidthChar;
 pub fn render(sources: &SourceMap, error: &Error) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "error[{}]: {error}", error.code());
-    match error.at() {
+    let gutter = match error.at() {
         Some(at) => snippet(&mut out, sources, at, &error.label()),
         None => {
             if let Error::Read { path, .. } = error {
                 let _ = writeln!(out, "  --> {}", path.display());
             }
+            GUTTER
         }
-    }
+    };
     for (loc, note) in error.notes() {
         let _ = writeln!(out, "note: {note}");
         snippet(&mut out, sources, loc, "");
     }
     if let Some(help) = error.help() {
-        let _ = writeln!(out, "   = help: {help}");
+        let _ = writeln!(out, "{} = help: {help}", " ".repeat(gutter));
     }
     out
 }
@@ -49,18 +50,23 @@ pub fn render(sources: &SourceMap, error: &Error) -> String {
 pub fn render_warning(sources: &SourceMap, warning: &Warning) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "warning[{}]: {warning}", warning.code());
-    snippet(&mut out, sources, warning.at(), &warning.label());
+    let gutter = snippet(&mut out, sources, warning.at(), &warning.label());
     for (loc, note) in warning.notes() {
         let _ = writeln!(out, "note: {note}");
         snippet(&mut out, sources, loc, "");
     }
-    let _ = writeln!(out, "   = help: {}", warning.help());
+    let _ = writeln!(out, "{} = help: {}", " ".repeat(gutter), warning.help());
     out
 }
 
-fn snippet(out: &mut String, sources: &SourceMap, at: Loc, label: &str) {
+/// The gutter's width (the line number's digits) where no line is shown.
+const GUTTER: usize = 2;
+
+/// Writes the `-->` location, the line and the carets under `at`; returns
+/// the gutter's width, for the `= help` line to line up under its `|`.
+fn snippet(out: &mut String, sources: &SourceMap, at: Loc, label: &str) -> usize {
     let Some(file) = sources.get(at.file) else {
-        return;
+        return GUTTER;
     };
     let (line, col) = file.lines.line_col(&file.text, at.span.start as usize);
     let text = file.lines.line_text(&file.text, line);
@@ -94,6 +100,7 @@ fn snippet(out: &mut String, sources: &SourceMap, at: Loc, label: &str) {
     } else {
         let _ = writeln!(out, "{pad} | {lead}{carets} {label}");
     }
+    number.len()
 }
 
 /// The machine-readable form of an error or a warning (`--json`).

@@ -159,11 +159,13 @@ fn from_pest(
     if expected.len() > 1 {
         expected.retain(|d| *d != "a unit");
     }
+    // Every word quoted in the descriptions (a sequence mode's four, a
+    // keyword's one), not examples such as `50 mm`.
     let keywords: Vec<&str> = positives
         .iter()
         .filter_map(|r| describe(*r))
-        .filter(|d| d.starts_with('`') && d.ends_with('`') && !d.contains(' '))
-        .map(|d| d.trim_matches('`'))
+        .flat_map(|d| d.split('`').skip(1).step_by(2))
+        .filter(|w| !w.is_empty() && !w.contains(char::is_whitespace))
         .collect();
     let (found, found_span) = token_at(src, pos);
     if expected == ["a quoted string"] && found == "the end of the line" {

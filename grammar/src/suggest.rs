@@ -1,21 +1,26 @@
 //! "Did you mean" suggestions by edit distance.
 
-/// Levenshtein distance between two short words, by characters.
+/// Edit distance between two short words, by characters: insertions,
+/// deletions, substitutions and swaps of two neighbours (`slto` for
+/// `slot`) each count one (the optimal string alignment distance).
 pub fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
     let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diagonal = row[0];
-        row[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let above = row[j + 1];
-            row[j + 1] = (above + 1)
-                .min(row[j] + 1)
-                .min(diagonal + usize::from(ca != cb));
-            diagonal = above;
+    // Rows i - 2, i - 1 and i of the distance table.
+    let mut before: Vec<usize> = Vec::new();
+    let mut above: Vec<usize> = (0..=b.len()).collect();
+    for i in 1..=a.len() {
+        let mut row = vec![i; b.len() + 1];
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            row[j] = (above[j] + 1).min(row[j - 1] + 1).min(above[j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                row[j] = row[j].min(before[j - 2] + 1);
+            }
         }
+        before = std::mem::replace(&mut above, row);
     }
-    row[b.len()]
+    above[b.len()]
 }
 
 /// The candidate closest to `word`, if it is close enough to be a likely
@@ -46,6 +51,10 @@ mod tests {
         assert_eq!(edit_distance("", "abc"), 3);
         assert_eq!(edit_distance("order", "ordr"), 1);
         assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("slto", "slot"), 1);
+        assert_eq!(edit_distance("prodcut", "product"), 1);
+        assert_eq!(edit_distance("ab", "ba"), 1);
+        assert_eq!(edit_distance("abc", ""), 3);
     }
 
     #[test]
@@ -55,5 +64,6 @@ mod tests {
         assert_eq!(closest("Bench", names), Some("bench"));
         assert_eq!(closest("tray", names), None);
         assert_eq!(closest("g6", ["g1", "g2"]), Some("g1"));
+        assert_eq!(closest("slto", ["box", "slot", "lift"]), Some("slot"));
     }
 }
