@@ -261,12 +261,21 @@ fn check_overrides(m: &Model, inv: &Inventory, placed: &[Placed], errors: &mut V
     check_layout(m, inv, &positions, &locs, errors, Some(&moved));
 }
 
-/// How far a product in a slot would stick out of the slot's box (0 if not).
+/// How far a product in a slot would stick out of the slot's box (0 if
+/// not, and 0 for a slot outside its box: E030 says so once, where the
+/// slot is written, instead of once per product and statement that uses
+/// it).
 fn fit_excess(cell: &Cell, product: &Product, slot: usize) -> f64 {
     let s = &cell.slots[slot];
-    cell.boxes[s.box_index]
-        .footprint()
-        .excess(&product.footprint(s.at))
+    let footprint = cell.boxes[s.box_index].footprint();
+    let centre = Rect {
+        min: s.at,
+        max: s.at,
+    };
+    if footprint.excess(&centre) > 0.0 {
+        return 0.0;
+    }
+    footprint.excess(&product.footprint(s.at))
 }
 
 /// Each (product, slot) pair fits its box, and no two placed products overlap.
