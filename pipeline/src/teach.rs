@@ -199,7 +199,15 @@ impl Lesson {
                 .filter(|b| !b.priority.is_empty() && blocks.contains(&b.name))
                 .map(|b| b.priority.clone())
                 .collect();
-            let inferred = sequence_rule(&world, &shown, &declared)?;
+            // The blocks that declared `sequence ascending` or
+            // `descending`.
+            let directed: BTreeSet<&str> = manifest
+                .demo_blocks
+                .iter()
+                .filter(|b| b.kind == "demos" && b.priority.is_empty() && !b.any_order)
+                .map(|b| b.name.as_str())
+                .collect();
+            let inferred = sequence_rule(&world, &shown, &declared, &directed)?;
             Inferred {
                 exceptions: inferred.exceptions.iter().map(|&e| ordered[e]).collect(),
                 rule: inferred.rule,
@@ -482,7 +490,14 @@ pub fn cell_rule(compiled: &Compiled, cell: &str) -> Result<Option<Inferred>> {
                 .collect()
         })
         .collect();
-    sequence_rule(&emit::world_file(model), &demos, &declared).map(Some)
+    let directed: BTreeSet<&str> = compiled
+        .expanded
+        .blocks
+        .iter()
+        .filter(|b| b.kind == "demos" && b.priority.is_empty() && !b.any_order)
+        .map(|b| b.name.as_str())
+        .collect();
+    sequence_rule(&emit::world_file(model), &demos, &declared, &directed).map(Some)
 }
 
 /// Whether `sequence` (product names) follows `rule` in `inventory`
@@ -506,11 +521,19 @@ fn follows(rule: &SequenceRule, inventory: &[&str], sequence: &[String]) -> bool
 /// that explains the most demonstrations wins (on a tie: the listed one
 /// when a priority was declared, else ascending, then descending); it
 /// must explain at least [`RULE_MAJORITY`] of them, else the
-/// demonstrations teach no rule and this is an error.
+/// demonstrations teach no rule and this is an error. A direction the
+/// `directed` blocks (`sequence ascending` or `descending`) declared comes
+/// first: it is the rule when it explains that many, even where a
+/// priority list fitted to every demonstration explains more (one
+/// hand-written demonstration against a generated block's direction
+/// would otherwise turn the rule into a list that orders the products no
+/// demonstration showed together by the inventory, against the declared
+/// direction); the others are its exceptions.
 pub fn sequence_rule(
     world: &WorldFile,
     demos: &[DemonstrationRecord],
     declared: &[Vec<String>],
+    directed: &BTreeSet<&str>,
 ) -> Result<Inferred> {
     let mut inventories: Vec<Vec<&str>> = Vec::new();
     let mut names: Vec<&str> = Vec::new();
@@ -585,6 +608,26 @@ pub fn sequence_rule(
             .map(|(k, _)| k)
             .collect()
     };
+    // The direction the directed blocks declared: the one every
+    // demonstration of theirs follows (each follows its own block's by
+    // construction), when they agree on one.
+    let directed_demos: Vec<usize> = (0..demos.len())
+        .filter(|&k| directed.contains(demos[k].block.as_str()))
+        .collect();
+    let mut directions = [SequenceRule::Ascending, SequenceRule::Descending]
+        .into_iter()
+        .filter(|rule| {
+            !directed_demos.is_empty()
+                && directed_demos
+                    .iter()
+                    .all(|&k| follows(rule, &inventories[k], &demos[k].sequence))
+        });
+    if let (Some(rule), None) = (directions.next(), directions.next()) {
+        let exceptions = breaking(&rule);
+        if (demos.len() - exceptions.len()) as f64 >= RULE_MAJORITY * demos.len() as f64 {
+            return Ok(Inferred { rule, exceptions });
+        }
+    }
     let mut best: Option<Inferred> = None;
     for rule in candidates {
         let exceptions = breaking(&rule);
@@ -723,5 +766,89 @@ mod tests {
         assert_eq!(rows[2..], before[2..]);
         assert_eq!(with_skipped_swapped(&g, Some(0)), None);
         assert_eq!(with_skipped_swapped(&g, None), None);
+    }
+
+    /// The cell, products and inventory of the rule tests below: six
+    /// products listed p1..p6, and `tail` (blocks) after them.
+    fn rule_of(tail: &str) -> Result<Option<Inferred>> {
+        use packwright_compiler::{Anywhere, MemoryLoader, check};
+        let text = format!(
+            "cell c {{
+  robot ur10
+  base (0, 0, 0)
+  suction 100 mm
+  pending (0.40, -0.40) to (0.80, 0.00)
+  box b (0.00, 0.65) size (0.40, 0.30, 0.08)
+  slot s1 (-0.12, 0.58)
+  slot s2 ( 0.00, 0.58)
+  slot s3 ( 0.12, 0.58)
+}}
+product p1 cube 50 mm
+product p2 cube 50 mm
+product p3 cube 50 mm
+product p4 cube 50 mm
+product p5 cube 50 mm
+product p6 cube 50 mm
+inventory inv for c {{
+  p1 (0.45, -0.10)
+  p2 (0.55, -0.10)
+  p3 (0.65, -0.10)
+  p4 (0.45, -0.25)
+  p5 (0.55, -0.25)
+  p6 (0.65, -0.25)
+}}
+{tail}"
+        );
+        let loader = MemoryLoader::new().with("rule.pack", text);
+        let compiled = check(&loader, &["rule.pack".into()], &Anywhere)
+            .unwrap_or_else(|f| panic!("{}", f.render()));
+        cell_rule(&compiled, "c")
+    }
+
+    /// A generated block declares `sequence descending`, and one
+    /// hand-written demonstration goes the other way. A priority list
+    /// fits all seven (p3, p2, p1 from the block, then p4 before p6):
+    /// it would order p5 and p6, which no demonstration shows against
+    /// p1-p3, by the inventory, against the declared direction. The
+    /// declared direction is the rule; the hand-written one breaks it.
+    #[test]
+    fn a_declared_direction_is_the_rule_where_most_demonstrations_follow_it() {
+        let tail = "demos d for inv {
+  choose 2 of p1, p2, p3 into s1, s2
+  sequence descending
+  seed 1
+}
+order o for inv {
+  p4 -> s1
+  p6 -> s2
+}
+demo o_seen for o { sequence p4, p6 }";
+        let inferred = rule_of(tail).ok().flatten();
+        let inferred = inferred.as_ref();
+        assert_eq!(inferred.map(|i| &i.rule), Some(&SequenceRule::Descending));
+        assert_eq!(inferred.map(|i| i.exceptions.len()), Some(1));
+        // Without the declaration (the same demonstrations written by
+        // hand), the list that explains every one is the rule.
+        let by_hand = "order o1 for inv { p3 -> s1
+  p2 -> s2 }
+demo o1_seen for o1 { sequence p3, p2 }
+order o2 for inv { p3 -> s1
+  p1 -> s2 }
+demo o2_seen for o2 { sequence p3, p1 }
+order o3 for inv { p2 -> s1
+  p1 -> s2 }
+demo o3_seen for o3 { sequence p2, p1 }
+order o4 for inv { p4 -> s1
+  p6 -> s2 }
+demo o4_seen for o4 { sequence p4, p6 }";
+        let inferred = rule_of(by_hand).ok().flatten();
+        assert!(
+            matches!(
+                inferred.as_ref().map(|i| &i.rule),
+                Some(SequenceRule::Listed(_))
+            ),
+            "{:?}",
+            inferred.map(|i| i.rule)
+        );
     }
 }
