@@ -5,7 +5,8 @@
 //! Phases: [`load`] (read + parse, following `use`) -> [`resolve`] (names,
 //! statements) -> [`validate`] (geometry) -> [`workspace`] (every pose the
 //! robot needs, asked of a [`Workspace`] the caller gives: the compiler
-//! knows no kinematics) -> [`expand`] (generators) ->
+//! knows no kinematics) -> [`expand`] (generators; [`draws`] then asks
+//! about the picks the suites' draws block) ->
 //! [`dataset`] (graph samples) -> [`emit`] (artifact bytes). Each phase
 //! reports every error it finds; a phase runs only if those before it were
 //! clean, so that one mistake is not reported again as its consequences.
@@ -13,6 +14,7 @@
 pub mod artifact;
 pub mod dataset;
 pub mod diagnostic;
+pub mod draws;
 pub mod emit;
 mod error;
 pub mod expand;
@@ -117,6 +119,8 @@ pub fn check(
         Ok(x) => x,
         Err(errors) => return Err(fail(loaded.sources, errors)),
     };
+    warnings.extend(draws::check(&model, &expanded, workspace));
+    warnings.sort_by_key(Warning::at);
     let shape = dataset::Shape::of(&expanded);
     Ok(Compiled {
         sources: loaded.sources,

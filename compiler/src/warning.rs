@@ -26,6 +26,23 @@ pub enum Warning {
         /// stands there in every package).
         by_packed: bool,
     },
+    /// A product the robot picks at its written place, but not in some
+    /// of a suite's scenarios, where the jitter draws it and a product
+    /// beside it nearer each other than W001 allows for (both move).
+    DrawnPickBlocked {
+        /// The suite's `jitter` (else the suite).
+        at: Loc,
+        suite: String,
+        /// How many scenarios the suite has.
+        suite_cases: usize,
+        product: String,
+        /// The product met, and its inventory entry.
+        by: String,
+        by_at: Loc,
+        /// The scenarios where it is met (their numbers, as named).
+        cases: Vec<String>,
+        jitter_mm: f64,
+    },
     /// Two products placed in neighbouring slots with less room between
     /// them than the planner keeps round a held product
     /// ([`HELD_ROOM`]): the second cannot be lowered past the first, so
@@ -70,6 +87,19 @@ impl fmt::Display for Warning {
                     None => f.write_str("while the other products of its inventory stand"),
                 }
             }
+            Warning::DrawnPickBlocked {
+                suite,
+                suite_cases,
+                product,
+                by,
+                cases,
+                ..
+            } => write!(
+                f,
+                "in {} of {suite_cases} scenarios of `{suite}` ({}) the robot cannot pick `{product}` where the jitter draws it while `{by}` stands",
+                cases.len(),
+                cases.join(", ")
+            ),
             Warning::TooClose {
                 a,
                 slot_a,
@@ -92,13 +122,16 @@ impl Warning {
         match self {
             Warning::PickBlocked { .. } => "W001",
             Warning::TooClose { .. } => "W002",
+            Warning::DrawnPickBlocked { .. } => "W003",
         }
     }
 
     /// Where the caret goes.
     pub fn at(&self) -> Loc {
         match self {
-            Warning::PickBlocked { at, .. } | Warning::TooClose { at, .. } => *at,
+            Warning::PickBlocked { at, .. }
+            | Warning::TooClose { at, .. }
+            | Warning::DrawnPickBlocked { at, .. } => *at,
         }
     }
 
@@ -109,6 +142,10 @@ impl Warning {
                 "every arm pose that reaches it meets a product beside it".into()
             }
             Warning::TooClose { .. } => "placed too close together".into(),
+            Warning::DrawnPickBlocked { jitter_mm, .. } => format!(
+                "moves each product up to {jitter_mm:.0} mm, two products up to {:.0} mm nearer each other",
+                2.0 * jitter_mm
+            ),
         }
     }
 
@@ -119,6 +156,9 @@ impl Warning {
                 by: Some((other, _, at)),
                 ..
             } => vec![(*at, format!("`{other}` stands here"))],
+            Warning::DrawnPickBlocked { by, by_at, .. } => {
+                vec![(*by_at, format!("`{by}` stands here"))]
+            }
             Warning::PickBlocked { .. } | Warning::TooClose { .. } => Vec::new(),
         }
     }
@@ -143,6 +183,9 @@ impl Warning {
             ),
             Warning::PickBlocked { product, .. } => format!(
                 "a package packs `{product}` only once the products beside it are gone: pack those first, or give it more room"
+            ),
+            Warning::DrawnPickBlocked { product, by, .. } => format!(
+                "these scenarios can fail with every planner: move `{product}` and `{by}` further apart, or lower the jitter"
             ),
             Warning::TooClose { gap_mm, .. } => format!(
                 "the one packed second cannot be lowered past the other: it is let go above the other's top and can land on it; move the slots at least {:.1} mm further apart",

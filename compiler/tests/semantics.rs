@@ -459,13 +459,123 @@ fn standing_products_block_the_start_as_an_error_and_a_pick_as_a_warning() {
     assert_eq!((product.as_str(), *pose), ("A", Pose::TopFace));
     assert_eq!(by.as_ref().map(|b| b.0.as_str()), Some("B"));
     let asked = ws.asked.into_inner();
-    let names: Vec<&str> = asked.iter().map(|(n, _)| n.as_str()).collect();
+    // W001's questions come first; then W003's, about the suite's picks
+    // (at the written places with the others widened by its 5 mm jitter
+    // and by twice that: B is blocked by neither, A already by W001, so
+    // no scenario is asked about).
+    let (w001, draws) = asked.split_at(asked.len().min(2));
+    let names: Vec<&str> = w001.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(names, ["A", "B"], "C and E are packed by nothing");
-    for (_, margins) in &asked {
+    let draws: Vec<(&str, f64)> = draws
+        .iter()
+        .map(|(n, m)| (n.as_str(), m.first().copied().unwrap_or(f64::NAN)))
+        .collect();
+    assert_eq!(draws, [("A", 0.005), ("B", 0.005), ("B", 0.01)]);
+    for (_, margins) in w001 {
         assert_eq!(margins.len(), 3, "the other three of the four entries");
         assert!(
             margins.iter().all(|m| (m - 0.008).abs() < 1e-12),
             "{margins:?}"
+        );
+    }
+}
+
+/// A workspace where picking `A` is blocked by `B` standing nearer than
+/// 114.9 mm along x (B's footprint widened by its margin); everything else
+/// is free.
+struct Near;
+
+/// How near (m, along x) `B` blocks the pick of `A` in [`Near`].
+const NEAR: f64 = 0.1149;
+
+impl packwright_compiler::Workspace for Near {
+    fn start(&self, _: &Model, _: usize) -> Option<Unreached> {
+        None
+    }
+    fn pick(&self, _: &Model, _: usize, _: usize, _: [f64; 2]) -> Option<Unreached> {
+        None
+    }
+    fn place(&self, _: &Model, _: usize, _: usize, _: [f64; 2], _: usize) -> Option<Unreached> {
+        None
+    }
+    fn pick_among(
+        &self,
+        m: &Model,
+        _: usize,
+        product: usize,
+        at: [f64; 2],
+        standing: &[Standing],
+    ) -> Option<Blocked> {
+        if m.products[product].name != "A" {
+            return None;
+        }
+        let b = standing.iter().position(|s| {
+            m.products[s.product].name == "B" && (s.at[0] - at[0]).abs() - s.margin < NEAR
+        })?;
+        Some(Blocked {
+            pose: Pose::TopFace,
+            by: Some(b),
+        })
+    }
+}
+
+/// W003: A and B stand 120 mm apart, and the suite jitters them by 5 mm:
+/// W001 (B widened by 5 mm, A where it is written) passes, but a draw can
+/// bring the two up to 10 mm nearer. The warning names exactly the
+/// scenarios where A is picked while B stands nearer than the workspace
+/// allows: B packed after A (the blocks declare ascending). Declaring
+/// descending, B is packed first and gone: no warning.
+#[test]
+fn a_pick_the_suites_draws_block_is_a_warning_naming_those_scenarios() {
+    for (mode, b_packed_first) in [("ascending", false), ("descending", true)] {
+        let loader = MemoryLoader::new().with(
+            "main.pack",
+            format!(
+                "{CELL}\ndemos t for stock5 {{\n choose 2 of A, B, C into g1, g2\n sequence {mode}\n}}\n\
+                 scenarios s for stock5 {{\n choose 2 of A, B, C into g1, g2, g3\n jitter 5 mm\n count 60\n seed 3\n}}\n"
+            ),
+        );
+        let c = match check(&loader, &[PathBuf::from("main.pack")], &Near) {
+            Ok(c) => c,
+            Err(f) => panic!("{:#?}", f.errors),
+        };
+        // The scenarios that should be named, from the expanded draws.
+        let suite = &c.expanded.suites[0];
+        let (a, b) = (0, 1);
+        let expected: Vec<String> = suite
+            .cases
+            .iter()
+            .filter(|case| {
+                let s = &case.setup;
+                let b_gone = s.slot_of(b).is_some() && b_packed_first;
+                s.slot_of(a).is_some()
+                    && !b_gone
+                    && (s.positions[b][0] - s.positions[a][0]).abs() < NEAR
+            })
+            .map(|case| case.name.rsplit('/').next().unwrap_or("").to_owned())
+            .collect();
+        // Only the products a scenario packs are drawn off their places:
+        // A is blocked only where B is packed too, after A (ascending).
+        assert_eq!(expected.is_empty(), b_packed_first, "{mode}: {expected:?}");
+        let named: Vec<&Vec<String>> = c
+            .warnings
+            .iter()
+            .filter_map(|w| match w {
+                Warning::DrawnPickBlocked {
+                    product, by, cases, ..
+                } if product == "A" && by == "B" => Some(cases),
+                _ => None,
+            })
+            .collect();
+        let want: Vec<&Vec<String>> = Some(&expected)
+            .filter(|e| !e.is_empty())
+            .into_iter()
+            .collect();
+        assert_eq!(named, want, "{mode}: {:#?}", c.warnings);
+        assert!(
+            c.warnings.iter().all(|w| w.code() == "W003"),
+            "{mode}: W001 passes: {:#?}",
+            c.warnings
         );
     }
 }

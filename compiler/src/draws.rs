@@ -1,0 +1,164 @@
+//! Phase 4b: what a suite's draws block. W001 ([`workspace`]) asks about
+//! each pick at the product's written place, the products beside it
+//! widened by the jitter; but the picked product jitters too, so two
+//! products may be drawn up to twice the jitter nearer each other, and a
+//! pick W001 passes can be blocked in some scenarios, with every planner.
+//! Here the picks the others may block at twice the jitter (a few
+//! questions per inventory) are asked again at each scenario's drawn
+//! positions, and the scenarios where a product stands in the way are
+//! named ([`Warning::DrawnPickBlocked`]).
+//!
+//! Invariants: only `scenarios` suites with a jitter are asked about, and
+//! only their picks that W001 does not already warn about (at the
+//! written places, the others widened by the jitter, the pick is free);
+//! one warning per suite, picked product and product met; a case is asked
+//! about with the products that stand when its package starts (not those
+//! missing, nor those a worker packed), so a product packed before the
+//! pick may be gone by then: a warning, not an error.
+//!
+//! [`workspace`]: crate::workspace
+
+use crate::expand::{Case, Expanded};
+use crate::model::{Model, ScenariosDef};
+use crate::warning::Warning;
+use crate::workspace::{Standing, Workspace};
+use packwright_grammar::ast::SequenceMode;
+use std::collections::BTreeMap;
+
+/// The warnings for every suite of `x` (expanded from `m`).
+pub fn check(m: &Model, x: &Expanded, ws: &dyn Workspace) -> Vec<Warning> {
+    let mut warnings = Vec::new();
+    for s in m.scenario_sets.iter().filter(|s| s.jitter > 0.0) {
+        let Some(suite) = x
+            .suites
+            .iter()
+            .find(|x| x.kind == "scenarios" && x.name == s.name)
+        else {
+            continue;
+        };
+        for entry in suspects(m, s, ws) {
+            warnings.extend(blocked_in(m, s, entry, &suite.cases, ws));
+        }
+    }
+    warnings
+}
+
+/// The entries `s` may pick whose pick is free at the written places with
+/// the others widened by the jitter (else W001 warns), and blocked with
+/// them widened by twice the jitter.
+fn suspects(m: &Model, s: &ScenariosDef, ws: &dyn Workspace) -> Vec<usize> {
+    let inv = &m.inventories[s.inventory];
+    let others = |k: usize, margin: f64| -> Vec<Standing> {
+        inv.entries
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != k)
+            .map(|(_, e)| Standing {
+                product: e.product,
+                at: e.at,
+                margin,
+            })
+            .collect()
+    };
+    s.choose
+        .entries
+        .iter()
+        .copied()
+        .filter(|&k| {
+            let e = &inv.entries[k];
+            let blocked = |margin| {
+                ws.pick_among(m, inv.cell, e.product, e.at, &others(k, margin))
+                    .is_some()
+            };
+            ws.pick(m, inv.cell, e.product, e.at).is_none()
+                && !blocked(s.jitter)
+                && blocked(2.0 * s.jitter)
+        })
+        .collect()
+}
+
+/// Whether entry `j` of inventory `i` is packed before entry `k`, by the
+/// order the inventory's `demos` blocks declare, when they all declare
+/// the same one (ascending or descending inventory order, or one `listed`
+/// priority naming both); `None` when they do not say.
+fn packed_before(m: &Model, i: usize, j: usize, k: usize) -> Option<bool> {
+    let mut rules = m.demo_sets.iter().filter(|d| d.inventory == i).map(|d| {
+        let place = |e: usize| d.choose.entries.iter().position(|&x| x == e);
+        match d.sequence {
+            SequenceMode::Ascending => Some(j < k),
+            SequenceMode::Descending => Some(j > k),
+            SequenceMode::Listed => Some(place(j)? < place(k)?),
+            SequenceMode::Random => None,
+        }
+    });
+    let first = rules.next()??;
+    rules.all(|r| r == Some(first)).then_some(first)
+}
+
+/// The warnings for entry `k` of `s`: per product met, the cases where
+/// the pick of `k`, at its drawn place, is blocked by it.
+fn blocked_in(
+    m: &Model,
+    s: &ScenariosDef,
+    k: usize,
+    cases: &[Case],
+    ws: &dyn Workspace,
+) -> Vec<Warning> {
+    let inv = &m.inventories[s.inventory];
+    let before = |j: usize| packed_before(m, s.inventory, j, k);
+    let mut by_other: BTreeMap<usize, Vec<String>> = BTreeMap::new();
+    for case in cases {
+        let setup = &case.setup;
+        let picked = setup.slot_of(k).is_some() && !setup.human_packed.contains(&k);
+        let Some(&at) = setup.positions.get(k).filter(|_| picked) else {
+            continue;
+        };
+        // The others standing when `k` is picked, with their entries: not
+        // missing, not packed by a worker, and not packed before it (a
+        // product the case packs too, in an order the file does not say,
+        // may be gone: not asked about).
+        let stands = |j: usize| {
+            j != k
+                && !setup.missing.contains(&j)
+                && !setup.human_packed.contains(&j)
+                && (setup.slot_of(j).is_none() || before(j) == Some(false))
+        };
+        let (standing, entries): (Vec<Standing>, Vec<usize>) = (0..inv.entries.len())
+            .filter(|&j| stands(j))
+            .filter_map(|j| {
+                let at = *setup.positions.get(j)?;
+                let product = inv.entries[j].product;
+                Some((
+                    Standing {
+                        product,
+                        at,
+                        margin: 0.0,
+                    },
+                    j,
+                ))
+            })
+            .unzip();
+        let met = ws
+            .pick_among(m, inv.cell, inv.entries[k].product, at, &standing)
+            .and_then(|b| b.by)
+            .and_then(|i| entries.get(i));
+        if let Some(&j) = met {
+            let name = case.name.rsplit('/').next().unwrap_or(&case.name);
+            by_other.entry(j).or_default().push(name.to_owned());
+        }
+    }
+    let name = |j: usize| m.products[inv.entries[j].product].name.clone();
+    by_other
+        .into_iter()
+        .map(|(j, cases)| Warning::DrawnPickBlocked {
+            at: s.jitter_loc.unwrap_or(s.loc),
+            suite: s.name.clone(),
+            suite_cases: s.count,
+            product: name(k),
+            by: name(j),
+            by_at: inv.entries[j].loc,
+            cases,
+            jitter_mm: s.jitter * 1000.0,
+        })
+        .collect()
+}
