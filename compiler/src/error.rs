@@ -17,6 +17,13 @@ const SEQUENCE_RULES: [&str; 4] = ["ascending", "descending", "listed", "random"
 /// 5 mm clear of everything but the product it picks, and its body ends
 /// short of the tip ([`Error::help`]).
 const THIN_TOP_FACE: f64 = 0.005;
+
+/// A pick whose tool tip would be higher than this above the table (m)
+/// is out of reach for its height: the help asks about the product's
+/// height first (the UR10's shoulder is 0.13 m up and its arm 1.3 m long,
+/// but over a product beside the base, with the cup pointing down, the
+/// wrist reaches far less high).
+const HIGH_TIP: f64 = 0.8;
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum Error {
     #[error("cannot read `{}`: {reason}", path.display())]
@@ -85,6 +92,8 @@ pub enum Error {
         at: Loc,
         percent: f64,
         min_percent: f64,
+        /// Written without `%` (a fraction).
+        bare: bool,
     },
     #[error(
         "the settle time after a {after} must be between {min_ms} ms and {max_ms} ms, not {ms} ms"
@@ -103,6 +112,8 @@ pub enum Error {
         at: Loc,
         percent: f64,
         min_percent: f64,
+        /// Written without `%` (a fraction).
+        bare: bool,
     },
     #[error("`{statement}` gives one value per joint: {expected}, not {found}")]
     JointCount {
@@ -482,6 +493,8 @@ impl Error {
             Error::StatementTwice { .. } => "keep only one of them".into(),
             Error::SlotBeforeBox { .. } => "declare the `box` before its slots: a slot belongs to the box above it".into(),
             Error::BadGeometry { fix, .. } => fix.clone(),
+            Error::SpeedOutOfRange { percent, bare: true, .. } if (200.0..=10_000.0).contains(percent) => format!("did you mean `speed {} %`? A number without `%` is a fraction of the arm's full speed (`speed 0.3` is 30 %)", percent / 100.0),
+            Error::DescentOutOfRange { percent, bare: true, .. } if (200.0..=10_000.0).contains(percent) => format!("did you mean `descent {} %`? A number without `%` is a fraction of the cell's speed (`descent 0.3` is 30 %)", percent / 100.0),
             Error::SpeedOutOfRange { min_percent, .. } => format!("write a share of the arm's full speed from `speed {min_percent} %` to `speed 100 %` (the default, the robot's own limits), or as a fraction (`speed 0.5`); the motions keep their paths and take 1/speed as long"),
             Error::SettleOutOfRange { after, min_ms, max_ms, .. } => format!("write a time from `settle {min_ms} ms after {after}` to `settle {max_ms} ms after {after}` (the default: `settle 100 ms after grip`, `settle 500 ms after release`); the arm waits that long, still, after the suction switches"),
             Error::DescentOutOfRange { min_percent, .. } => format!("write a share of the cell's speed from `descent {min_percent} %` to `descent 100 %` (the default: as fast as every other motion), or as a fraction (`descent 0.25`); the descent from the hover onto a product's top face keeps its path and takes 1/descent as long"),
@@ -497,6 +510,7 @@ impl Error {
             Error::FarFromBase { max, .. } => format!("check the number and its unit: lengths and positions are metres unless they carry `mm` or `cm` (`0.65`, `650 mm`); every pending area and box lies within {max} m of the cell's `base`"),
             Error::Unreachable { pose: Pose::Start, .. } => "the arm starts with its cup 0.35 m over the middle of the `pending` area: bring the area nearer the robot's base (or the `base` nearer the area)".into(),
             Error::Unreachable { pose: Pose::TopFace, tip, .. } if tip[2] <= THIN_TOP_FACE => format!("the top face is {:.0} mm above the table, and the cup is kept a few millimetres clear of everything but the product it picks: it would meet the table, wherever the product stands. Check the product's height; one thinner than {:.0} mm cannot be picked by this cup", tip[2] * 1000.0, THIN_TOP_FACE * 1000.0 + 1.0),
+            Error::Unreachable { pose, tip, .. } if pose.is_picking() && tip[2] > HIGH_TIP => format!("the tool tip would be {:.2} m above the table, over the product's top face: check the product's height (sizes are metres unless they carry `mm` or `cm`); a product this tall can be picked only near the robot's base, with a low `lift` and a short cup (`suction`)", tip[2]),
             Error::Unreachable { pose, .. } if pose.is_picking() => "move the product nearer the robot's base (or the `base` nearer the products), or lower the cell's `lift`; the cup (`suction`) reaches down from the wrist, so a shorter cup reaches further".into(),
             Error::Unreachable { pose: Pose::Approach, .. } => "the robot carries the product round its base axis, at the lift's height or clear of the box's rim if that is higher, half-way between the product and the slot: bring the product and the slot nearer each other, lower the cell's `lift`, or use a lower box".into(),
             Error::Unreachable { .. } => "move the slot (or its box) nearer the robot's base, or use a lower box: the product is held above the rim before it goes down".into(),

@@ -485,6 +485,7 @@ impl Resolver<'_> {
                             at: Loc::new(f, s.span),
                             percent: s.value * 100.0,
                             min_percent: lo * 100.0,
+                            bare: !s.percent,
                         });
                         ok = false;
                     }
@@ -508,6 +509,7 @@ impl Resolver<'_> {
                             at: Loc::new(f, s.span),
                             percent: s.value * 100.0,
                             min_percent: lo * 100.0,
+                            bare: !s.percent,
                         });
                         ok = false;
                     }
