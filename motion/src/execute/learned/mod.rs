@@ -1221,10 +1221,15 @@ pub(super) fn run<W: World>(
         .iter()
         .map(|&(p, s)| {
             let mut row = runner.station.row(p, s);
-            row.error_m = runner.station.error_of(&first, p, s);
-            row.outcome = match row.error_m {
+            // A product not attempted has no final distance from its slot
+            // (as the other planners report it): only one already packed.
+            let error = runner.station.error_of(&first, p, s);
+            row.outcome = match error {
                 None => Outcome::Waiting,
-                Some(e) if e <= SUCCESS_RADIUS => Outcome::AlreadyPacked,
+                Some(e) if e <= SUCCESS_RADIUS => {
+                    row.error_m = error;
+                    Outcome::AlreadyPacked
+                }
                 Some(_) => Outcome::NotAttempted,
             };
             row
