@@ -7,7 +7,7 @@ use crate::error::{PipelineError, Result};
 use packwright_compiler::Compiled;
 use packwright_compiler::artifact::{CellRecord, DemonstrationRecord, RobotRecord, WorldFile};
 use packwright_compiler::emit::cell_record;
-use packwright_compiler::expand::Setup;
+use packwright_compiler::expand::{Expanded, Setup};
 use packwright_compiler::model::Model;
 use packwright_interface::OrderTask;
 use packwright_interface::scene::{
@@ -206,6 +206,41 @@ pub fn episode(m: &Model, setup: &Setup) -> Result<Episode> {
     })
 }
 
+/// What to say of a scenario `name` that `x` does not hold: the suite's
+/// name for that number (`SUITE/7` for `SUITE/07`: numbers are padded to
+/// the count's digits), the suite's range (a number past its count), or
+/// how scenarios are named.
+pub fn scenario_hint(x: &Expanded, name: &str) -> String {
+    let named = name.rsplit_once('/').and_then(|(suite, number)| {
+        let suite = x.suites.iter().find(|s| s.name == suite)?;
+        Some((suite, number.parse::<usize>().ok()?))
+    });
+    match named {
+        Some((suite, n)) if (1..=suite.cases.len()).contains(&n) => format!(
+            "did you mean `{}`? (a suite's numbers are padded to its count's digits)",
+            suite.cases[n - 1].name
+        ),
+        Some((suite, _)) => match (suite.cases.first(), suite.cases.last()) {
+            (Some(first), Some(last)) => format!(
+                "suite `{}` has {} scenarios, `{}` to `{}`",
+                suite.name,
+                suite.cases.len(),
+                first.name,
+                last.name
+            ),
+            _ => format!("suite `{}` has no scenarios", suite.name),
+        },
+        None => {
+            let known: Vec<&str> = x
+                .suites
+                .iter()
+                .flat_map(|s| s.cases.first().map(|k| k.name.as_str()))
+                .collect();
+            format!("scenarios are named like: {}", known.join(", "))
+        }
+    }
+}
+
 /// The setup named by `--order` or `--scenario`.
 pub fn find_setup(
     c: &Compiled,
@@ -219,16 +254,10 @@ pub fn find_setup(
                 return Ok((case.name.clone(), case.setup.clone()));
             }
         }
-        let known: Vec<&str> = c
-            .expanded
-            .suites
-            .iter()
-            .flat_map(|s| s.cases.first().map(|k| k.name.as_str()))
-            .collect();
         return Err(PipelineError::NoSuch {
             what: "scenario",
             name: name.to_owned(),
-            known: format!("scenarios are named like: {}", known.join(", ")),
+            known: scenario_hint(&c.expanded, name),
         });
     }
     let Some(name) = order else {
@@ -328,4 +357,48 @@ pub fn demonstration_episode(world: &WorldFile, demo: &DemonstrationRecord) -> R
         },
         placements,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use packwright_compiler::{Anywhere, MemoryLoader, check};
+
+    /// A scenario name a user mistyped gets the suite's name for that
+    /// number, or the suite's range; any other, how scenarios are named.
+    #[test]
+    fn a_mistyped_scenario_gets_its_padded_name_or_the_suites_range() {
+        let text = "cell c {
+  robot ur10
+  base (0, 0, 0)
+  suction 100 mm
+  pending (0.45, -0.50) to (0.85, -0.10)
+  box b (0.00, 0.65) size (0.40, 0.30, 0.08)
+  slot s1 (-0.12, 0.58)
+  slot s2 ( 0.00, 0.58)
+}
+product p1 cube 50 mm
+product p2 cube 50 mm
+inventory inv for c {
+  p1 (0.50, -0.20)
+  p2 (0.62, -0.20)
+}
+scenarios many for inv {
+  choose 1 of p1, p2 into s1, s2
+  count 12
+}";
+        let loader = MemoryLoader::new().with("hint.pack", text);
+        let compiled = check(&loader, &["hint.pack".into()], &Anywhere)
+            .unwrap_or_else(|f| panic!("{}", f.render()));
+        let hint = |name| scenario_hint(&compiled.expanded, name);
+        assert_eq!(
+            hint("many/7"),
+            "did you mean `many/07`? (a suite's numbers are padded to its count's digits)"
+        );
+        assert_eq!(
+            hint("many/13"),
+            "suite `many` has 12 scenarios, `many/01` to `many/12`"
+        );
+        assert_eq!(hint("few/1"), "scenarios are named like: many/01");
+    }
 }

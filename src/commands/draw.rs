@@ -84,14 +84,9 @@ pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
             Some((suite.order, case.setup.clone()))
         });
         let Some((order, setup)) = found else {
-            let known: Vec<&str> = expanded
-                .suites
-                .iter()
-                .filter_map(|s| s.cases.first().map(|c| c.name.as_str()))
-                .collect();
             bail!(
-                "no scenario `{name}`; scenarios are named like: {}",
-                known.join(", ")
+                "no scenario `{name}`; {}",
+                packwright_pipeline::episode::scenario_hint(&expanded, name)
             );
         };
         Subject::Setup {
