@@ -28,7 +28,7 @@ use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
 use guards::{
     COLLIDING_RELEASE_RAISE, Inside, KEEP_INSIDE, descent_vias, fewer_vias, held_at_limits,
-    level_vias, release_collides, swing_via, with_room,
+    level_vias, nearer_middle, release_collides, swing_via, with_room,
 };
 use nalgebra::Vector3;
 use packwright_interface::outcome::{
@@ -209,6 +209,13 @@ impl<W: World> Learned<'_, W> {
             checked_samples(s.arm, &s.checker, start, &waypoints, load)
                 .map(|samples| Route { waypoints, samples })
         };
+        // Nearly half a turn round: the other way, when it leaves the base
+        // nearer the middle of its range and is free.
+        if let Some(other) = nearer_middle(arm, &start, &end)
+            && let Ok(route) = route(vec![other])
+        {
+            return Ok(route);
+        }
         match route(vec![end]) {
             Ok(route) => Ok(route),
             Err(straight) if ways == Ways::Straight => Err(why(straight)),
