@@ -486,10 +486,12 @@ fn where_no_shape_is_free_at_the_learned_contact_the_expert_grips_again() {
 /// inverse-kinematics solution in the arm's own shape (9.32 s).
 #[test]
 fn the_back_up_from_a_shape_the_policy_was_not_taught_in_goes_straight_up() {
-    let report = executes_file("tests/cells/spirits.pack", "smalls_only_2of3/03");
-    assert_eq!(report["complete"], true, "{report}");
-    let seconds = execution_s(&report, "pourer");
-    assert!(seconds < 10.0, "{report}");
+    packs_within(
+        "tests/cells/spirits.pack",
+        "smalls_only_2of3/03",
+        "pourer",
+        10.0,
+    );
 }
 
 /// A breakfast line (tests/cells/breakfast.pack): the small goods wait in
@@ -502,11 +504,13 @@ fn the_back_up_from_a_shape_the_policy_was_not_taught_in_goes_straight_up() {
 /// 8.50 s.
 #[test]
 fn a_hover_through_the_policys_steps_leaves_out_the_steps_a_straight_motion_skips() {
-    let report = executes_file("tests/cells/breakfast.pack", "across_3of4/01");
-    assert_eq!(report["complete"], true, "{report}");
+    let report = packs_within(
+        "tests/cells/breakfast.pack",
+        "across_3of4/01",
+        "biscuits",
+        10.0,
+    );
     assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
-    let seconds = execution_s(&report, "biscuits");
-    assert!(seconds < 10.0, "{report}");
 }
 
 /// The scenario W003 names in tests/cases/warn/drawn_pick_blocked.pack
@@ -559,10 +563,7 @@ fn the_scenario_w003_names_fails_with_every_planner_and_leaves_the_rest_unmeasur
 /// its range (`nearer_middle`): 7.09 s.
 #[test]
 fn nearly_half_a_turn_round_the_base_goes_the_way_that_leaves_it_room() {
-    let report = executes_file("tests/cells/rear_box.pack", "rear_3of5/03");
-    assert_eq!(report["complete"], true, "{report}");
-    let seconds = execution_s(&report, "P4");
-    assert!(seconds < 8.0, "{report}");
+    packs_within("tests/cells/rear_box.pack", "rear_3of5/03", "P4", 8.0);
 }
 
 /// A kiosk's mailer beside the robot base (tests/cells/kiosk.pack, slots
@@ -692,16 +693,20 @@ fn executes_with_the_bundled_model(
 
 /// Scenario `scenario` of the cell file `pack`, executed with the bundled
 /// model (exit 0): the JSON report.
-/// The simulated seconds `report` took to pack `product` (infinite when
-/// it is not in the report).
-fn execution_s(report: &serde_json::Value, product: &str) -> f64 {
-    report["products"]
+/// The learned planner's report on `scenario` of `pack`, checked
+/// complete, with `product` packed in under `seconds` of simulated time.
+fn packs_within(pack: &str, scenario: &str, product: &str, seconds: f64) -> serde_json::Value {
+    let report = executes_file(pack, scenario);
+    assert_eq!(report["complete"], true, "{report}");
+    let took = report["products"]
         .as_array()
         .into_iter()
         .flatten()
         .find(|p| p["product"] == product)
         .and_then(|p| p["execution_s"].as_f64())
-        .unwrap_or(f64::INFINITY)
+        .unwrap_or(f64::INFINITY);
+    assert!(took < seconds, "{product}: {took} s\n{report}");
+    report
 }
 
 fn executes_file(pack: &str, scenario: &str) -> serde_json::Value {
