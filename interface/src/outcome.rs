@@ -511,6 +511,10 @@ pub struct ProductReport {
     pub bound_s: f64,
     /// Distance of the product's centre from its slot goal at the end.
     pub error_m: Option<f64>,
+    /// Its turn: 1 for the first product the robot handled in this run,
+    /// 2 for the next, ... (the rows are in the order's assignment order,
+    /// not the order packed); `None` when the robot did not handle it.
+    pub turn: Option<usize>,
     #[serde(flatten)]
     pub outcome: Outcome,
 }
@@ -648,6 +652,7 @@ mod tests {
 
     fn row(product: &str, outcome: Outcome) -> ProductReport {
         ProductReport {
+            turn: None,
             product: product.into(),
             slot: "s".into(),
             planning_s: 0.0,

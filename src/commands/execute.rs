@@ -261,7 +261,8 @@ fn on_robot(
 fn print_report(name: &str, report: &Report, clock: &str) {
     outln!("{name}: planner {}", report.planner);
     outln!(
-        "{:<12} {:<8} {:>11} {:>11} {:>9} {:>10}  outcome",
+        "{:>4} {:<12} {:<8} {:>11} {:>11} {:>9} {:>10}  outcome",
+        "turn",
         "product",
         "slot",
         "planning",
@@ -282,8 +283,10 @@ fn print_report(name: &str, report: &Report, clock: &str) {
         } else {
             ("-".into(), "-".into(), "-".into())
         };
+        let turn = p.turn.map_or("-".into(), |t| t.to_string());
         outln!(
-            "{:<12} {:<8} {:>11} {:>11} {:>9} {:>10}  {}",
+            "{:>4} {:<12} {:<8} {:>11} {:>11} {:>9} {:>10}  {}",
+            turn,
             p.product,
             p.slot,
             planning,

@@ -244,6 +244,8 @@ pub(crate) struct Station<'a, W: World> {
     pub deadline: Option<Instant>,
     /// The way back up from the last release, checked but not sent yet.
     backup: Option<Backup>,
+    /// How many products the robot has handled ([`Station::measure`]).
+    handled: usize,
     /// The products where they stood when the station began: a product
     /// the run never picks must end there (`Report::disturbed`).
     standing: Vec<Seen>,
@@ -285,6 +287,7 @@ impl<'a, W: World> Station<'a, W> {
             package_planning: Duration::ZERO,
             deadline: None,
             backup: None,
+            handled: 0,
         }
     }
 
@@ -854,6 +857,7 @@ impl<'a, W: World> Station<'a, W> {
             execution_s: 0.0,
             bound_s: 0.0,
             error_m: None,
+            turn: None,
             outcome: packwright_interface::Outcome::NotAttempted,
         }
     }
@@ -864,6 +868,8 @@ impl<'a, W: World> Station<'a, W> {
     ///
     /// [`restart_clock`]: Station::restart_clock
     pub fn measure(&mut self, row: &mut ProductReport, p: usize, s: usize) {
+        self.handled += 1;
+        row.turn = Some(self.handled);
         let period = self.world.control_period();
         let after = self.world.observe();
         row.error_m = self.error_of(&after, p, s);
