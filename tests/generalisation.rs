@@ -546,9 +546,16 @@ fn the_scenario_w003_names_fails_with_every_planner_and_leaves_the_rest_unmeasur
             .collect();
         assert!(!rest.is_empty(), "{planner}: {report}");
         assert!(
-            rest.iter().all(|p| p["error_m"].is_null()),
+            rest.iter()
+                .all(|p| p["error_m"].is_null() && p["turn"].is_null()),
             "{planner}: {report}"
         );
+        // The products handled, by their turns: dice first, then the sachet.
+        let turns: Vec<(&str, u64)> = products
+            .iter()
+            .filter_map(|p| Some((p["product"].as_str()?, p["turn"].as_u64()?)))
+            .collect();
+        assert_eq!(turns, [("dice", 1), ("sachet", 2)], "{planner}: {report}");
     }
 }
 
