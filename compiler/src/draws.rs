@@ -80,8 +80,15 @@ fn suspects(m: &Model, s: &ScenariosDef, ws: &dyn Workspace) -> Vec<usize> {
 /// Whether entry `j` of inventory `i` is packed before entry `k`, by the
 /// order the inventory's `demos` blocks declare, when they all declare
 /// the same one (ascending or descending inventory order, or one `listed`
-/// priority naming both); `None` when they do not say.
+/// priority naming both); by inventory order where nothing demonstrates
+/// the inventory (the order packed when no demonstration shows one);
+/// `None` when they do not say.
 fn packed_before(m: &Model, i: usize, j: usize, k: usize) -> Option<bool> {
+    let demonstrated = m.demo_sets.iter().any(|d| d.inventory == i)
+        || m.demos.iter().any(|d| m.orders[d.order].inventory == i);
+    if !demonstrated {
+        return Some(j < k);
+    }
     let mut rules = m.demo_sets.iter().filter(|d| d.inventory == i).map(|d| {
         let place = |e: usize| d.choose.entries.iter().position(|&x| x == e);
         match d.sequence {

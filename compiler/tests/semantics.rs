@@ -527,11 +527,20 @@ impl packwright_compiler::Workspace for Near {
 /// descending, B is packed first and gone: no warning.
 #[test]
 fn a_pick_the_suites_draws_block_is_a_warning_naming_those_scenarios() {
-    for (mode, b_packed_first) in [("ascending", false), ("descending", true)] {
+    let demos = |mode: &str| {
+        format!("demos t for stock5 {{\n choose 2 of A, B, C into g1, g2\n sequence {mode}\n}}\n")
+    };
+    // Nothing demonstrating the inventory: packed in inventory order.
+    for (demos, b_packed_first) in [
+        (demos("ascending"), false),
+        (demos("descending"), true),
+        (String::new(), false),
+    ] {
+        let mode = demos.lines().nth(2).unwrap_or("no demonstrations");
         let loader = MemoryLoader::new().with(
             "main.pack",
             format!(
-                "{CELL}\ndemos t for stock5 {{\n choose 2 of A, B, C into g1, g2\n sequence {mode}\n}}\n\
+                "{CELL}\n{demos}\
                  scenarios s for stock5 {{\n choose 2 of A, B, C into g1, g2, g3\n jitter 5 mm\n count 60\n seed 3\n}}\n"
             ),
         );
