@@ -133,6 +133,8 @@ pub struct Cell {
     pub base: [f64; 3],
     pub suction: f64,
     pub pending: Rect,
+    /// Where the `pending` statement is.
+    pub pending_loc: Loc,
     pub lift: f64,
     /// The arm's speed as a share of its full speed (1: the robot's own
     /// limits): every motion keeps its path and takes `1 / speed` as long

@@ -669,6 +669,7 @@ impl Resolver<'_> {
             base,
             suction,
             pending,
+            pending_loc: pending_at,
             lift,
             speed,
             grip_settle,

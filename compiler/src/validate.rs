@@ -8,6 +8,9 @@ use crate::warning::{HELD_ROOM, Warning};
 
 /// Slots closer than this are taken for the same slot.
 pub const MIN_SLOT_DISTANCE: f64 = 0.010;
+/// The built-in UR10's base on the table (m round its axis: its mount is
+/// 190 mm across): no box or pending area may stand there.
+pub const BASE_RADIUS: f64 = 0.095;
 
 pub fn validate(m: &Model) -> Vec<Error> {
     let mut errors = Vec::new();
@@ -155,13 +158,56 @@ fn check_reach(cell: &Cell, p: [f64; 2], at: Loc, what: String, errors: &mut Vec
 }
 
 fn check_cell(cell: &Cell, errors: &mut Vec<Error>) {
-    for b in &cell.boxes {
+    // The robot's base stands on the table: a circle of BASE_RADIUS round
+    // its axis for the built-in UR10, its axis for another arm.
+    let base = Rect {
+        min: [cell.base[0], cell.base[1]],
+        max: [cell.base[0], cell.base[1]],
+    };
+    let base_radius = if cell.robot == RobotModel::Ur10 {
+        BASE_RADIUS
+    } else {
+        0.0
+    };
+    let over_base = |r: &Rect| r.gap(&base) < base_radius || r.contains(base.min);
+    let base_fix = format!(
+        "the robot's base stands at ({:.3}, {:.3}), {:.0} mm round its axis: move the {{}} away from it, or the `base`",
+        cell.base[0],
+        cell.base[1],
+        base_radius * 1000.0
+    );
+    // Products cannot stand within the arm's reach from the axis anyway
+    // (E036): an area that only clips the base's edge holds none there.
+    if cell.pending.contains(base.min) {
+        errors.push(Error::BadGeometry {
+            at: cell.pending_loc,
+            what: "the pending area covers the robot's base axis".into(),
+            fix: base_fix.replace("{}", "pending area"),
+        });
+    }
+    for (i, b) in cell.boxes.iter().enumerate() {
         if b.footprint().overlaps(&cell.pending) {
             errors.push(Error::BadGeometry {
                 at: b.loc,
                 what: format!("box `{}` overlaps the pending area", b.name),
                 fix: "move the box or the pending area apart".into(),
             });
+        }
+        if over_base(&b.footprint()) {
+            errors.push(Error::BadGeometry {
+                at: b.loc,
+                what: format!("box `{}` stands over the robot's base", b.name),
+                fix: base_fix.replace("{}", "box"),
+            });
+        }
+        for a in &cell.boxes[..i] {
+            if a.footprint().overlaps(&b.footprint()) {
+                errors.push(Error::BadGeometry {
+                    at: b.loc,
+                    what: format!("boxes `{}` and `{}` overlap", a.name, b.name),
+                    fix: "move one of them: each box stands on its own part of the table (a box's position is its centre, its size width, depth and height)".into(),
+                });
+            }
         }
     }
     for (i, s) in cell.slots.iter().enumerate() {
