@@ -9,8 +9,8 @@
 //!   where the straight joint motion bows into a wall;
 //! - [`level_vias`]: across at the higher end's height, where a swing
 //!   out of or past a deep box comes down or rises over its rim;
-//! - [`fewer_vias`]: through the policy's steps, the ones a straight
-//!   joint motion skips left out;
+//! - [`fewer_vias`]: through the policy's steps or a descent's vias, the
+//!   ones a straight joint motion skips left out;
 //! - [`held_at_limits`] and [`with_room`]: the base and wrist 3 near their
 //!   limits held there, or turned the other way round;
 //! - [`nearer_middle`]: nearly half a turn round, the base the way that

@@ -232,22 +232,30 @@ impl<W: World> Learned<'_, W> {
                 // joint motion bows sideways into a wall: across to above
                 // its end, then down the vertical, as the expert's descent
                 // and the back-up from a release go.
+                // The vias (or steps, below) a straight joint motion can
+                // skip are left out first: the blend speeds up on longer
+                // legs, and a descent through five vias stops short of
+                // each.
+                let free = |a: &Joints, b: &Joints| {
+                    s.checker
+                        .check_motion(a, b, load.held, load.ignore)
+                        .is_none()
+                };
                 let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
-                if let Some(vias) = descent_vias(arm, base, suction, start, end, tolerance, act)
-                    && let Ok(route) = route(vias)
-                {
-                    return Ok(route);
+                if let Some(vias) = descent_vias(arm, base, suction, start, end, tolerance, act) {
+                    let fewer = fewer_vias(start, &vias, free);
+                    if fewer.len() < vias.len()
+                        && let Ok(route) = route(fewer)
+                    {
+                        return Ok(route);
+                    }
+                    if let Ok(route) = route(vias) {
+                        return Ok(route);
+                    }
                 }
                 // Through every step instead (passing through them), when
                 // they stay within the limits.
-                // The steps a straight joint motion can skip are left out
-                // first: the blend speeds up on longer legs.
                 if steps.iter().all(|q| s.arm.within_limits(q)) {
-                    let free = |a: &Joints, b: &Joints| {
-                        s.checker
-                            .check_motion(a, b, load.held, load.ignore)
-                            .is_none()
-                    };
                     let fewer = fewer_vias(start, &steps, free);
                     if fewer.len() < steps.len()
                         && let Ok(route) = route(fewer)
