@@ -241,30 +241,25 @@ impl<W: World> Learned<'_, W> {
                         .check_motion(a, b, load.held, load.ignore)
                         .is_none()
                 };
+                let through = |points: Vec<Joints>| {
+                    let fewer = fewer_vias(start, &points, free);
+                    (fewer.len() < points.len())
+                        .then(|| route(fewer).ok())
+                        .flatten()
+                        .or_else(|| route(points).ok())
+                };
                 let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
-                if let Some(vias) = descent_vias(arm, base, suction, start, end, tolerance, act) {
-                    let fewer = fewer_vias(start, &vias, free);
-                    if fewer.len() < vias.len()
-                        && let Ok(route) = route(fewer)
-                    {
-                        return Ok(route);
-                    }
-                    if let Ok(route) = route(vias) {
-                        return Ok(route);
-                    }
+                if let Some(vias) = descent_vias(arm, base, suction, start, end, tolerance, act)
+                    && let Some(route) = through(vias)
+                {
+                    return Ok(route);
                 }
-                // Through every step instead (passing through them), when
+                // Through the steps instead (passing through them), when
                 // they stay within the limits.
-                if steps.iter().all(|q| s.arm.within_limits(q)) {
-                    let fewer = fewer_vias(start, &steps, free);
-                    if fewer.len() < steps.len()
-                        && let Ok(route) = route(fewer)
-                    {
-                        return Ok(route);
-                    }
-                    if let Ok(route) = route(steps) {
-                        return Ok(route);
-                    }
+                if steps.iter().all(|q| s.arm.within_limits(q))
+                    && let Some(route) = through(steps)
+                {
+                    return Ok(route);
                 }
                 // Across at the higher end's height.
                 let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
