@@ -391,3 +391,25 @@ fn execute_draws_its_path() {
     assert_eq!(count(&svg, "failure"), 0);
     assert!(svg.contains("deli_crate, planner expert"));
 }
+
+/// Diagnostics about what the picture does not show (here, the file's
+/// other two cells) are counted apart, so that the count adds up.
+#[test]
+fn diagnostics_about_what_the_picture_does_not_show_are_counted() {
+    let dir = scratch("draw", "elsewhere");
+    let out = dir.join("two_boxes.svg");
+    let o = packwright(&[
+        "draw",
+        "tests/cases/err/boxes_and_base.pack",
+        "--cell",
+        "two_boxes",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("4 diagnostics (1 drawn where it is, 0 more listed under the picture, 3 about what this picture does not show)"),
+        "{stderr}"
+    );
+}

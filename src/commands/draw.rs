@@ -155,12 +155,20 @@ pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
         .iter()
         .filter(|m| m.place != Place::Cell)
         .count();
+    // Diagnostics about what the picture does not show (another cell, an
+    // order not drawn) are neither drawn nor listed: say how many.
+    let elsewhere = failed.errors.len().saturating_sub(picture.marks.len());
     errln!(
-        "\n{} diagnostic{} ({drawn} drawn where {}, {} more listed under the picture)",
+        "\n{} diagnostic{} ({drawn} drawn where {}, {} more listed under the picture{})",
         failed.errors.len(),
         if failed.errors.len() == 1 { "" } else { "s" },
         if drawn == 1 { "it is" } else { "they are" },
-        picture.marks.len() - drawn
+        picture.marks.len() - drawn,
+        if elsewhere > 0 {
+            format!(", {elsewhere} about what this picture does not show")
+        } else {
+            String::new()
+        }
     );
     Ok(Exit::Diagnostics)
 }
