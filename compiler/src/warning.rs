@@ -25,6 +25,10 @@ pub enum Warning {
         /// Whether an order or a generator packs the product met (else it
         /// stands there in every package).
         by_packed: bool,
+        /// How far (mm) the blocks on the inventory may draw the products
+        /// standing beside it from their places (their largest `jitter`;
+        /// each was asked about anywhere within it).
+        jitter_mm: f64,
     },
     /// A product the robot picks at its written place, but not in some
     /// of a suite's scenarios, where the jitter draws it and a product
@@ -85,6 +89,13 @@ impl fmt::Display for Warning {
                         write!(f, "while `{other}` stands at ({:.3}, {:.3})", at[0], at[1])
                     }
                     None => f.write_str("while the other products of its inventory stand"),
+                }?;
+                match self {
+                    Warning::PickBlocked { jitter_mm, .. } if *jitter_mm > 0.0 => write!(
+                        f,
+                        ", or up to {jitter_mm:.0} mm from there (the jitter of its inventory's blocks)"
+                    ),
+                    _ => Ok(()),
                 }
             }
             Warning::DrawnPickBlocked {

@@ -453,6 +453,7 @@ fn standing(
                 pose: b.pose,
                 by,
                 by_packed,
+                jitter_mm: jitter * 1000.0,
             });
         }
     }

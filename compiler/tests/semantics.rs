@@ -458,6 +458,12 @@ fn standing_products_block_the_start_as_an_error_and_a_pick_as_a_warning() {
     };
     assert_eq!((product.as_str(), *pose), ("A", Pose::TopFace));
     assert_eq!(by.as_ref().map(|b| b.0.as_str()), Some("B"));
+    // The message says B was asked about anywhere the jitter may put it.
+    let message = c.warnings[0].to_string();
+    assert!(
+        message.ends_with("or up to 8 mm from there (the jitter of its inventory's blocks)"),
+        "{message}"
+    );
     let asked = ws.asked.into_inner();
     // W001's questions come first; then W003's, about the suite's picks
     // (at the written places with the others widened by its 5 mm jitter
