@@ -90,6 +90,12 @@ impl SyntaxError {
                 suggestion: Some(s),
                 ..
             } => Some(format!("did you mean `{s}`?")),
+            SyntaxError::Unexpected {
+                expected, found, ..
+            } if expected == "`to`" && found.starts_with("`-") => Some(
+                "a range is written with `to`, as in `human packs 1 to 2` (`-2` reads as minus two)"
+                    .into(),
+            ),
             SyntaxError::Unexpected { found, .. } if found == "end of file" => Some(
                 "the file ends in the middle of a statement or block; close every `{` with `}`"
                     .into(),
