@@ -160,29 +160,28 @@ fn check_reach(cell: &Cell, p: [f64; 2], at: Loc, what: String, errors: &mut Vec
 fn check_cell(cell: &Cell, errors: &mut Vec<Error>) {
     // The robot's base stands on the table: a circle of BASE_RADIUS round
     // its axis for the built-in UR10, its axis for another arm.
-    let base = Rect {
-        min: [cell.base[0], cell.base[1]],
-        max: [cell.base[0], cell.base[1]],
-    };
+    let base = Rect::centred([cell.base[0], cell.base[1]], 0.0, 0.0);
     let base_radius = if cell.robot == RobotModel::Ur10 {
         BASE_RADIUS
     } else {
         0.0
     };
     let over_base = |r: &Rect| r.gap(&base) < base_radius || r.contains(base.min);
-    let base_fix = format!(
-        "the robot's base stands at ({:.3}, {:.3}), {:.0} mm round its axis: move the {{}} away from it, or the `base`",
-        cell.base[0],
-        cell.base[1],
-        base_radius * 1000.0
-    );
+    let base_fix = |what: &str| {
+        format!(
+            "the robot's base stands at ({:.3}, {:.3}), {:.0} mm round its axis: move the {what} away from it, or the `base`",
+            cell.base[0],
+            cell.base[1],
+            base_radius * 1000.0
+        )
+    };
     // Products cannot stand within the arm's reach from the axis anyway
     // (E036): an area that only clips the base's edge holds none there.
     if cell.pending.contains(base.min) {
         errors.push(Error::BadGeometry {
             at: cell.pending_loc,
             what: "the pending area covers the robot's base axis".into(),
-            fix: base_fix.replace("{}", "pending area"),
+            fix: base_fix("pending area"),
         });
     }
     for (i, b) in cell.boxes.iter().enumerate() {
@@ -197,7 +196,7 @@ fn check_cell(cell: &Cell, errors: &mut Vec<Error>) {
             errors.push(Error::BadGeometry {
                 at: b.loc,
                 what: format!("box `{}` stands over the robot's base", b.name),
-                fix: base_fix.replace("{}", "box"),
+                fix: base_fix("box"),
             });
         }
         for a in &cell.boxes[..i] {
@@ -212,10 +211,7 @@ fn check_cell(cell: &Cell, errors: &mut Vec<Error>) {
     }
     for (i, s) in cell.slots.iter().enumerate() {
         let b = &cell.boxes[s.box_index];
-        let excess = b.footprint().excess(&Rect {
-            min: s.at,
-            max: s.at,
-        });
+        let excess = outside_box(cell, s);
         if excess > 0.0 {
             errors.push(Error::SlotOutsideBox {
                 at: s.loc,
@@ -313,15 +309,20 @@ fn check_overrides(m: &Model, inv: &Inventory, placed: &[Placed], errors: &mut V
 /// it).
 fn fit_excess(cell: &Cell, product: &Product, slot: usize) -> f64 {
     let s = &cell.slots[slot];
-    let footprint = cell.boxes[s.box_index].footprint();
-    let centre = Rect {
-        min: s.at,
-        max: s.at,
-    };
-    if footprint.excess(&centre) > 0.0 {
+    if outside_box(cell, s) > 0.0 {
         return 0.0;
     }
-    footprint.excess(&product.footprint(s.at))
+    cell.boxes[s.box_index]
+        .footprint()
+        .excess(&product.footprint(s.at))
+}
+
+/// How far slot `s`'s centre lies outside its box (m; 0 inside): E030's
+/// measure.
+fn outside_box(cell: &Cell, s: &Slot) -> f64 {
+    cell.boxes[s.box_index]
+        .footprint()
+        .excess(&Rect::centred(s.at, 0.0, 0.0))
 }
 
 /// Each (product, slot) pair fits its box, and no two placed products overlap.

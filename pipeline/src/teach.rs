@@ -439,6 +439,12 @@ fn follow_rule(world: &WorldFile, rule: &SequenceRule, demo: &mut DemonstrationR
 /// Share of the demonstrations a rule must explain to be taught.
 pub const RULE_MAJORITY: f64 = 0.8;
 
+/// Whether a rule that `agree` of `total` demonstrations follow explains
+/// at least [`RULE_MAJORITY`] of them.
+fn explains_majority(agree: usize, total: usize) -> bool {
+    agree as f64 >= RULE_MAJORITY * total as f64
+}
+
 /// The sequence rule a lesson's demonstrations follow, and the ones that
 /// do not follow it.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -624,7 +630,7 @@ pub fn sequence_rule(
         });
     if let (Some(rule), None) = (directions.next(), directions.next()) {
         let exceptions = breaking(&rule);
-        if (demos.len() - exceptions.len()) as f64 >= RULE_MAJORITY * demos.len() as f64 {
+        if explains_majority(demos.len() - exceptions.len(), demos.len()) {
             return Ok(Inferred { rule, exceptions });
         }
     }
@@ -643,7 +649,7 @@ pub fn sequence_rule(
         exceptions: Vec::new(),
     });
     let agree = demos.len() - best.exceptions.len();
-    if (agree as f64) < RULE_MAJORITY * demos.len() as f64 {
+    if !explains_majority(agree, demos.len()) {
         let detail = match &best.exceptions[..] {
             [first, ..] => format!(
                 "the best rule, {}, explains {agree} of {} demonstrations (block `{}`, demonstration {first}, handles {} in another order)",
