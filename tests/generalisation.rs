@@ -585,6 +585,38 @@ fn a_descent_down_the_vertical_leaves_out_the_vias_a_straight_motion_skips() {
     packs_within("tests/cells/tight_box.pack", "tight_4of7/13", "p4", 7.0);
 }
 
+/// The same cell's products wait 6 mm apart, jittered up to 2 mm each:
+/// some stand 2-3 mm from a neighbour, inside the 3 mm padding round a
+/// held product. The lift then collided before it moved, and every
+/// planner failed (tight_6of7/04: p4 beside p5, 2.4 mm; /05: p1 beside
+/// p2), or lowered the lift until the product hung among its neighbours
+/// and the carry from there collided. A lifted product's sides are now
+/// padded by the room it has (`Checker::lifting`), a lowered lift must
+/// leave it free once padded all round, and a lift whose straight joint
+/// motion bows into a neighbour goes up the cup tip's line.
+#[test]
+fn a_product_standing_close_to_its_neighbours_is_lifted_out_from_between_them() {
+    for scenario in ["tight_6of7/04", "tight_6of7/05"] {
+        for planner in ["expert", "rrt", "learned"] {
+            let out = packwright(&[
+                "execute",
+                "tests/cells/tight_box.pack",
+                "--scenario",
+                scenario,
+                "--planner",
+                planner,
+                "--json",
+            ]);
+            assert_eq!(
+                out.status.code(),
+                Some(0),
+                "{scenario} {planner}: {}",
+                text(&out)
+            );
+        }
+    }
+}
+
 /// A kiosk's mailer beside the robot base (tests/cells/kiosk.pack, slots
 /// 0.33-0.37 m from its axis). The bundled model's steps towards the
 /// point above a slot spiral in there, each turning the tip's way a few

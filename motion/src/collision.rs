@@ -236,7 +236,22 @@ pub struct Held {
     /// obstacle while it rises, and going into that surface, or dragging
     /// down through it, still is.
     pub leaving_support: bool,
+    /// The most its sides are padded (m; infinite: the checker's held
+    /// padding): set by [`Checker::lifting`] for a product standing
+    /// closer to a neighbour than that padding. A sweep's slack is a share
+    /// of it too ([`Checker::sweep`]).
+    pub side_pad: f64,
 }
+
+/// The room kept at the start of a lift between a product's padded sides
+/// and its nearest neighbour (m), when the neighbour stands closer than
+/// the padding ([`Checker::lifting`]).
+pub const LIFT_ROOM: f64 = 0.0005;
+
+/// The least a lifted product's sides are padded ([`Checker::lifting`],
+/// m): a neighbour closer than this and [`LIFT_ROOM`] together leaves the
+/// product where it stands.
+pub const MIN_SIDE_PAD: f64 = 0.0005;
 
 /// How far above its bottom a product leaving its support is checked from
 /// (m): the check box stops this short of the product's bottom, so that
@@ -246,7 +261,8 @@ pub const LIFT_CLEARANCE: f64 = 0.0005;
 
 impl Held {
     /// The box the checker tests for this product hanging from `flange`
-    /// (its pose and shape), grown by `pad`. Leaving its support, the box
+    /// (its pose and shape), grown by `pad` (its sides by no more than
+    /// [`Held::side_pad`]). Leaving its support, the box
     /// keeps its margin above but ends [`LIFT_CLEARANCE`] short of the
     /// bottom (the product's +z is the flange's, pointing down).
     fn padded_box(&self, flange: &Isometry3<f64>, pad: f64) -> (Pose, Cuboid) {
@@ -257,9 +273,10 @@ impl Held {
             (self.size[2] / 2.0 + pad, 0.0)
         };
         let at = pose(&(flange * self.in_flange * Isometry3::translation(0.0, 0.0, shift)));
+        let side = pad.min(self.side_pad);
         let cuboid = Cuboid::new(Vector::new(
-            (self.size[0] / 2.0 + pad) as f32,
-            (self.size[1] / 2.0 + pad) as f32,
+            (self.size[0] / 2.0 + side) as f32,
+            (self.size[1] / 2.0 + side) as f32,
             half_z as f32,
         ));
         (at, cuboid)
@@ -277,6 +294,17 @@ impl Held {
                 UnitQuaternion::identity(),
             ),
             leaving_support: false,
+            side_pad: f64::INFINITY,
+        }
+    }
+
+    /// The same product carried, no longer leaving its support: padded
+    /// all round.
+    pub fn carried(&self) -> Held {
+        Held {
+            leaving_support: false,
+            side_pad: f64::INFINITY,
+            ..self.clone()
         }
     }
 
@@ -413,6 +441,60 @@ impl Checker {
                 )
             })
             .collect();
+    }
+
+    /// `held`, just gripped where it stands, lifted off
+    /// ([`Held::leaving_support`]) with its sides padded no more than the
+    /// room to its nearest neighbour leaves, less [`LIFT_ROOM`], and no
+    /// less than [`MIN_SIDE_PAD`] (a sweep keeps its slack to a share of
+    /// that, [`Checker::sweep`]). Products
+    /// wait on a line a few millimetres apart, jittered closer; the lift
+    /// takes one straight up from between them, where the full padding
+    /// would meet a neighbour before it moves. Where it stands: the
+    /// standing product of its name, else `standing` (none: the full
+    /// padding).
+    pub fn lifting(&self, held: Held, standing: Option<&ProductBody>) -> Held {
+        let named = self
+            .products
+            .iter()
+            .find(|o| o.is_product(Some(held.name.as_str())));
+        let own;
+        let at = match (named, standing) {
+            (Some(o), _) => o,
+            (None, Some(p)) => {
+                own = Obstacle::new(
+                    Body::Product(held.name.clone()),
+                    p.centre,
+                    p.size.map(|v| v / 2.0),
+                    p.yaw,
+                );
+                &own
+            }
+            (None, None) => return held.leaving_support(),
+        };
+        let room = self.room_round(at, &held.name);
+        let side_pad =
+            (room - LIFT_ROOM).clamp(MIN_SIDE_PAD.min(self.held_padding), self.held_padding);
+        Held {
+            side_pad,
+            ..held.leaving_support()
+        }
+    }
+
+    /// The distance from a standing product's box `at` to the nearest
+    /// other product or fixture beside it (reaching above its bottom:
+    /// not what it stands on), but the product `name`.
+    fn room_round(&self, at: &Obstacle, name: &str) -> f64 {
+        let bottom = f64::from(at.aabb.mins.z);
+        self.statics
+            .iter()
+            .chain(&self.products)
+            .filter(|o| !o.is_product(Some(name)) && o.top > bottom + LIFT_CLEARANCE)
+            .map(|o| {
+                parry3d::query::distance(&at.pose, &*at.shape, &o.pose, &*o.shape)
+                    .map_or(0.0, |d| f64::from(d.distance))
+            })
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// The first collision of the arm (and `held`) at joints `q`. The
@@ -628,6 +710,12 @@ impl Checker {
         (self.held_padding * SWEEP_SLACK_SHARE).max(MIN_SWEEP_SLACK)
     }
 
+    /// [`Checker::sweep_slack`] for `held`, whose sides may be padded less
+    /// ([`Held::side_pad`]): the same share of its least padding.
+    fn slack_for(&self, held: &Held) -> f64 {
+        (self.held_padding.min(held.side_pad) * SWEEP_SLACK_SHARE).max(MIN_SWEEP_SLACK)
+    }
+
     /// The first obstacle the held product meets on its way from `qa`
     /// (where its box is `a`, checked) to `qb` (`b`, checked), through the
     /// configurations `between` in order (commands between two checked
@@ -676,7 +764,7 @@ impl Checker {
         ignore: Option<&str>,
         depth: usize,
     ) -> Result<(), Hit> {
-        if self.strays(qa, a, qb, b, between) <= self.sweep_slack() {
+        if self.strays(qa, a, qb, b, between) <= self.slack_for(held) {
             return match self.hull_meets_obstacles(a, b, held, ignore) {
                 Some(hit) => Err(hit),
                 None => Ok(()),
@@ -1043,6 +1131,79 @@ mod tests {
             }],
             slots: vec![],
         }
+    }
+
+    /// A product standing 2 mm from its neighbour (products waiting on a
+    /// line, jittered closer): padded all round, the lift collides before
+    /// it moves; lifted ([`Checker::lifting`]), its sides are padded by
+    /// the room less [`LIFT_ROOM`], and the arm gripping it is free. The
+    /// padding stays whole with room for it, and no less than
+    /// [`MIN_SIDE_PAD`] when a neighbour is closer still (then the lift
+    /// collides).
+    #[test]
+    fn a_product_close_to_its_neighbour_is_lifted_with_the_room_it_has() {
+        use crate::execute::{Load, reach};
+        use nalgebra::Point3;
+        use std::f64::consts::FRAC_PI_2;
+        let arm = Arm::ur10();
+        let size = [0.05, 0.05, 0.06];
+        let stand = |gap: f64| {
+            let mut checker = Checker::new(&arm, &cell());
+            let product = |name: &str, x: f64| ProductBody {
+                name: name.into(),
+                centre: [x, -0.3, 0.03],
+                size,
+                yaw: 0.0,
+            };
+            checker.set_products(&[product("A", 0.6), product("B", 0.65 + gap)]);
+            checker
+        };
+        let held = Held::under_cup("A", size, 0.1, Vector3::zeros());
+        let checker = stand(0.002);
+        let lifted = checker.lifting(held.clone(), None);
+        assert!(
+            (lifted.side_pad - (0.002 - LIFT_ROOM)).abs() < 1e-6,
+            "{}",
+            lifted.side_pad
+        );
+        assert!(lifted.leaving_support);
+        // The UR "ready" pose, for the inverse kinematics to start near.
+        let ready =
+            arm.from_ur_convention(&[0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0]);
+        let top = Point3::new(0.6, -0.3, 0.06);
+        let grip =
+            reach(&checker, top, 0.0, &ready, Load::picking("A")).expect("the gripping pose");
+        assert_eq!(checker.check(&grip, Some(&lifted), None), None);
+        let whole = held.clone().leaving_support();
+        assert!(
+            checker.check(&grip, Some(&whole), None).is_some(),
+            "padded all round, the lift starts free: a weak test"
+        );
+        assert_eq!(
+            stand(0.01).lifting(held.clone(), None).side_pad,
+            HELD_PADDING
+        );
+        assert_eq!(
+            stand(0.0003).lifting(held.clone(), None).side_pad,
+            MIN_SIDE_PAD
+        );
+        // Not standing among the checker's products: given where it stands.
+        let elsewhere = Held::under_cup("C", size, 0.1, Vector3::zeros());
+        let at = ProductBody {
+            name: "C".into(),
+            centre: [0.6, -0.3 - 0.05 - 0.0015, 0.03],
+            size,
+            yaw: 0.0,
+        };
+        let mut only_a = Checker::new(&arm, &cell());
+        only_a.set_products(&[ProductBody {
+            name: "A".into(),
+            centre: [0.6, -0.3, 0.03],
+            size,
+            yaw: 0.0,
+        }]);
+        let side = only_a.lifting(elsewhere, Some(&at)).side_pad;
+        assert!((side - (0.0015 - LIFT_ROOM)).abs() < 1e-6, "{side}");
     }
 
     /// Over thousands of configurations, free and colliding, near the

@@ -25,6 +25,7 @@ mod reachable;
 mod reasoner;
 mod scripted;
 mod station;
+mod vias;
 
 pub use learned::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps, tolerance};
 pub use reachable::{Reachability, Unreached};

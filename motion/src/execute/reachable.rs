@@ -13,8 +13,8 @@
 //! a start pose or a pick the empty cell allows).
 
 use super::station::{
-    Load, MAX_CARRY_RAISES, MAX_RAISES, MIN_LIFT, READY, home_on, home_tip, lowerings, raises,
-    solutions,
+    LIFT_VIAS, Load, MAX_CARRY_RAISES, MAX_RAISES, MIN_LIFT, READY, home_on, home_tip, lowerings,
+    raises, reach, solutions,
 };
 use crate::collision::{Checker, Held, ProductBody};
 use crate::expert::{self, SubGoal};
@@ -153,14 +153,20 @@ impl Reachability {
         // The lift carries the product off the table, and may be lowered
         // down to MIN_LIFT above the top face (as `Station::solve` does).
         let gripped = Held::under_cup("held", size, self.cell.suction, Vector3::zeros());
-        let lifting = gripped.leaving_support();
+        let standing = ProductBody {
+            name: "held".to_owned(),
+            centre: [at[0], at[1], size[2] / 2.0],
+            size,
+            yaw: 0.0,
+        };
+        let lifting = self.checker.lifting(gripped, Some(&standing));
         let lowered: Vec<f64> = std::iter::once(goals[2].tip[2])
             .chain(lowerings(goals[2].tip[2], MAX_RAISES))
             .take_while(|z| *z >= goals[1].tip[2] + MIN_LIFT)
             .collect();
         for (k, goal) in goals.iter().enumerate() {
             let reached = match k {
-                2 => self.step(goal, &lowered, from.as_deref(), Load::holding(&lifting)),
+                2 => self.lift(goal, &lowered, from.as_deref().unwrap_or(&[]), &lifting),
                 _ => self.step(goal, &[goal.tip[2]], from.as_deref(), Load::FREE),
             };
             if reached.is_empty() {
@@ -173,6 +179,71 @@ impl Reachability {
             from = Some(reached);
         }
         Ok(())
+    }
+
+    /// The lift's free solutions, as [`Station::solve`](super::station::Station::solve)
+    /// finds them: at the first of `heights` (full, then lowered) joined
+    /// straight from one of `from`, a lowered one only where the product
+    /// carried on from there is free; else at full height up the cup
+    /// tip's line from one of `from`.
+    fn lift(&self, goal: &SubGoal, heights: &[f64], from: &[Joints], held: &Held) -> Vec<Joints> {
+        let load = Load::holding(held);
+        let carried = held.carried();
+        let clear = |q: &Joints| self.checker.check(q, Some(&carried), None).is_none();
+        let full = self.step(goal, &heights[..heights.len().min(1)], Some(from), load);
+        if !full.is_empty() {
+            return full;
+        }
+        let lowered = heights.iter().skip(1).find_map(|z| {
+            let free: Vec<Joints> = self
+                .step(goal, &[*z], Some(from), load)
+                .into_iter()
+                .filter(clear)
+                .collect();
+            (!free.is_empty()).then_some(free)
+        });
+        if let Some(lowered) = lowered {
+            return lowered;
+        }
+        let Some(z) = heights.first() else {
+            return Vec::new();
+        };
+        from.iter()
+            .filter_map(|p| self.up_the_line(p, [goal.tip[0], goal.tip[1], *z], load))
+            .collect()
+    }
+
+    /// The end of the way from `from` up the cup tip's straight line to
+    /// `to`, through [`LIFT_VIAS`] via points each joined straight to the
+    /// one before, when every segment is free.
+    fn up_the_line(&self, from: &Joints, to: [f64; 3], load: Load) -> Option<Joints> {
+        let a = self
+            .checker
+            .arm()
+            .tool_tip(self.checker.base(), from, self.cell.suction);
+        let mut near = *from;
+        for i in 1..=LIFT_VIAS {
+            let t = i as f64 / LIFT_VIAS as f64;
+            let tip = Point3::new(
+                a[0] + (to[0] - a[0]) * t,
+                a[1] + (to[1] - a[1]) * t,
+                a[2] + (to[2] - a[2]) * t,
+            );
+            let q = reach(&self.checker, tip, 0.0, &near, load)?;
+            let free = q
+                .iter()
+                .zip(&near)
+                .all(|(a, b)| (a - b).abs() <= MAX_DESCENT_TURN)
+                && self
+                    .checker
+                    .check_motion(&near, &q, load.held, load.ignore)
+                    .is_none();
+            if !free {
+                return None;
+            }
+            near = q;
+        }
+        Some(near)
     }
 
     /// Placing it, picked at `at`, in slot `slot`: the first sub-goal no

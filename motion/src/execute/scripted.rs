@@ -269,7 +269,7 @@ impl<W: World> Scripted<'_, W> {
         let free = Load::picking(name);
         // Once gripped, the lift carries the product off where it stood.
         let gripped = Held::under_cup(name, spec.size, cell.suction, Vector3::zeros());
-        let lifting = gripped.clone().leaving_support();
+        let lifting = self.station.checker.lifting(gripped.clone(), None);
         let picking_loads = [free, free, Load::holding(&lifting)];
         let from = self.station.backup_end().unwrap_or(obs.joints);
         let pick = StageInfo {

@@ -8,6 +8,7 @@
 //! Invariant: nothing reaches the world that [`checked_blend`] did not
 //! return.
 
+use super::vias::fewer_vias;
 use crate::blend::{Blended, blend_straight};
 use crate::collision::{Checker, Held, HeldPose, MAX_STEP, ProductBody, Touch};
 use crate::expert::{SubGoal, Suction};
@@ -92,6 +93,9 @@ pub(crate) struct Leg {
 }
 
 /// Where the last of `legs` leaves the arm.
+/// Via points of a lift up the cup tip's line ([`Station::up_the_line`]).
+pub(crate) const LIFT_VIAS: usize = 5;
+
 pub(crate) fn leg_end(legs: &[Leg]) -> Option<Joints> {
     legs.last().and_then(|l| l.route.waypoints.last().copied())
 }
@@ -428,23 +432,34 @@ impl<'a, W: World> Station<'a, W> {
         let lifting = goal.suction == Suction::Keep && load.held.is_some_and(|h| h.leaving_support);
         let carried =
             goal.suction == Suction::Keep && load.held.is_some_and(|h| !h.leaving_support);
-        let solve = |z: f64| {
+        // `line`: a lift up the cup tip's line where the straight joint
+        // motion collides.
+        let solve_by = |z: f64, line: bool| {
             let tip = Point3::new(goal.tip[0], goal.tip[1], z);
             let joints = reach(&self.checker, tip, yaw, from, load)?;
             // A release or a lift its straight motion cannot reach is
             // blocked (None).
             let straight = if goal.suction == Suction::Off || lifting {
-                let samples =
-                    checked_samples(self.arm, &self.checker, *from, &[joints], load).ok()?;
-                let route = Route {
-                    waypoints: vec![joints],
-                    samples,
-                };
+                let route = self.checked(k, *from, &[joints], load).ok().or_else(|| {
+                    line.then(|| self.up_the_line(k, *from, joints, yaw, load))
+                        .flatten()
+                })?;
                 Some((*from, route))
             } else {
                 None
             };
             Some(Solved { joints, straight })
+        };
+        let solve = |z: f64| solve_by(z, false);
+        // A lowered lift leaves the product where the next motion, which
+        // carries it padded all round, starts free: not down among its
+        // neighbours.
+        let clear_when_carried = |solved: &Solved| {
+            load.held.is_none_or(|h| {
+                self.checker
+                    .check(&solved.joints, Some(&h.carried()), load.ignore)
+                    .is_none()
+            })
         };
         solve(goal.tip[2])
             .or_else(|| {
@@ -462,10 +477,12 @@ impl<'a, W: World> Station<'a, W> {
                         let floor = self.tip(from)[2] + MIN_LIFT;
                         lowerings(goal.tip[2], MAX_RAISES)
                             .take_while(|z| *z >= floor)
-                            .find_map(solve)
+                            .find_map(|z| solve(z).filter(clear_when_carried))
                     })
                     .flatten()
             })
+            // Up the line last: the blend stops short of its vias.
+            .or_else(|| lifting.then(|| solve_by(goal.tip[2], true)).flatten())
             .or_else(|| {
                 carried
                     .then(|| raises(goal.tip[2], MAX_CARRY_RAISES).find_map(solve))
@@ -485,6 +502,47 @@ impl<'a, W: World> Station<'a, W> {
                     met,
                 }
             })
+    }
+
+    /// The checked way from `from` up the cup tip's straight line to
+    /// `to`, through [`LIFT_VIAS`] via points (inverse kinematics, each
+    /// nearest the one before), where the straight joint motion bows
+    /// sideways into a neighbour: a product lifted from between others a
+    /// few millimetres away. `None` when a via has no free solution or
+    /// the way collides.
+    fn up_the_line(
+        &self,
+        k: usize,
+        from: Joints,
+        to: Joints,
+        yaw: f64,
+        load: Load,
+    ) -> Option<Route> {
+        let (a, b) = (self.tip(&from), self.tip(&to));
+        let mut near = from;
+        let mut vias = Vec::with_capacity(LIFT_VIAS);
+        for i in 1..LIFT_VIAS {
+            let t = i as f64 / LIFT_VIAS as f64;
+            let tip = Point3::from(std::array::from_fn::<f64, 3, _>(|j| {
+                a[j] + (b[j] - a[j]) * t
+            }));
+            near = reach(&self.checker, tip, yaw, &near, load)?;
+            vias.push(near);
+        }
+        vias.push(to);
+        // Only beside the neighbours does the line matter: the vias a
+        // straight joint motion skips are left out first (the blend
+        // stops short of each).
+        let free = |a: &Joints, b: &Joints| {
+            self.checker
+                .check_motion(a, b, load.held, load.ignore)
+                .is_none()
+        };
+        let fewer = fewer_vias(from, &vias, free);
+        (fewer.len() < vias.len())
+            .then(|| self.checked(k, from, &fewer, load).ok())
+            .flatten()
+            .or_else(|| self.checked(k, from, &vias, load).ok())
     }
 
     /// A picking stage's sub-goals (hover, contact, lift) solved from the

@@ -23,12 +23,13 @@ use super::station::{
     Connect, Leg, Load, MAX_CARRY_RAISES, MAX_RAISES, PlanningBudget, RAISE_STEP, READY, Route,
     SUCCESS_RADIUS, Station, Unchecked, judge, leg_end, raises,
 };
+use super::vias::fewer_vias;
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
 use guards::{
-    COLLIDING_RELEASE_RAISE, Inside, KEEP_INSIDE, descent_vias, fewer_vias, held_at_limits,
-    level_vias, nearer_middle, release_collides, swing_via, with_room,
+    COLLIDING_RELEASE_RAISE, Inside, KEEP_INSIDE, descent_vias, held_at_limits, level_vias,
+    nearer_middle, release_collides, swing_via, with_room,
 };
 use nalgebra::Vector3;
 use packwright_interface::outcome::{
@@ -918,13 +919,13 @@ impl<W: World> Learned<'_, W> {
             plan.feature[1] - tip[1],
             top - tip[2],
         );
-        Held::under_cup(
+        let held = Held::under_cup(
             plan.product,
             size,
             s.task.cell.suction,
             flange.inverse() * off,
-        )
-        .leaving_support()
+        );
+        s.checker.lifting(held, None)
     }
 
     /// The checked way from `start`, where the cup let go, straight up to
