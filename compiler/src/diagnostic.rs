@@ -69,20 +69,25 @@ fn snippet(out: &mut String, sources: &SourceMap, at: Loc, label: &str) -> usize
         return GUTTER;
     };
     let (line, col) = file.lines.line_col(&file.text, at.span.start as usize);
-    let text = file.lines.line_text(&file.text, line);
+    let full = file.lines.line_text(&file.text, line);
     let number = line.to_string();
     let pad = " ".repeat(number.len());
     let _ = writeln!(out, "{pad}--> {}:{line}:{col}", file.path.display());
     let _ = writeln!(out, "{pad} |");
-    let _ = writeln!(out, "{number} | {text}");
-    // Carets under the span's part on this line (at least one), in
-    // terminal columns: a wide character (CJK, most emoji) takes two, a
-    // combining mark none; tabs are copied so that they line up.
-    let start_char = col - 1;
+    // A long line is shown as a window round the span, `...` where it is
+    // cut: echoing a line of thousands of names once per error made the
+    // output grow with the square of its length.
     let span_text = file.text.get(at.span.range()).unwrap_or("");
     let on_line = span_text.split('\n').next().unwrap_or("");
+    let (text, start_char) = window(full, col - 1, on_line.chars().count());
+    let _ = writeln!(out, "{number} | {text}");
+    // Carets under the span's part on this line (at least one, and no
+    // more than the window shows), in terminal columns: a wide character
+    // (CJK, most emoji) takes two, a combining mark none; tabs are copied
+    // so that they line up.
     let width = on_line
         .chars()
+        .take(SHOWN_CHARS)
         .map(|c| c.width().unwrap_or(0))
         .sum::<usize>()
         .max(1);
@@ -101,6 +106,36 @@ fn snippet(out: &mut String, sources: &SourceMap, at: Loc, label: &str) -> usize
         let _ = writeln!(out, "{pad} | {lead}{carets} {label}");
     }
     number.len()
+}
+
+/// The most characters of a source line a snippet shows.
+const SHOWN_CHARS: usize = 100;
+
+/// Characters shown before the span when a long line is cut.
+const SHOWN_BEFORE: usize = 40;
+
+/// The part of `line` a snippet shows for a span starting at character
+/// `start` and `len` characters long: the whole line when it is short,
+/// else [`SHOWN_CHARS`] characters from [`SHOWN_BEFORE`] before the span,
+/// marked `...` where cut; and where the span starts in it (characters).
+fn window(line: &str, start: usize, len: usize) -> (String, usize) {
+    if line.len() <= SHOWN_CHARS {
+        return (line.to_owned(), start);
+    }
+    let count = line.chars().count();
+    if count <= SHOWN_CHARS {
+        return (line.to_owned(), start);
+    }
+    let from = start.saturating_sub(SHOWN_BEFORE);
+    let to = (from + SHOWN_CHARS)
+        .max(start + len.min(SHOWN_CHARS))
+        .min(count);
+    let cut: String = line.chars().skip(from).take(to - from).collect();
+    let (before, after) = (
+        if from > 0 { "..." } else { "" },
+        if to < count { "..." } else { "" },
+    );
+    (format!("{before}{cut}{after}"), start - from + before.len())
 }
 
 /// The machine-readable form of an error or a warning (`--json`).
@@ -160,5 +195,62 @@ pub fn warning_to_json(sources: &SourceMap, warning: &Warning) -> JsonDiagnostic
         column: Some(column),
         label: warning.label(),
         help: Some(warning.help()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::source::MemoryLoader;
+    use crate::{Anywhere, SHOWN_ERRORS, check};
+    use std::path::PathBuf;
+
+    /// A short line is shown whole; a long one as a window of
+    /// [`SHOWN_CHARS`] characters from [`SHOWN_BEFORE`] before the span,
+    /// `...` where cut, the span's start moved with it.
+    #[test]
+    fn a_long_line_is_shown_as_a_window_round_the_span() {
+        assert_eq!(window("a b c", 2, 1), ("a b c".to_owned(), 2));
+        let line: String = (0..300)
+            .map(|i| char::from(b'a' + (i % 26) as u8))
+            .collect();
+        let (shown, at) = window(&line, 150, 3);
+        assert!(
+            shown.starts_with("...") && shown.ends_with("..."),
+            "{shown}"
+        );
+        assert_eq!(shown.chars().count(), SHOWN_CHARS + 6);
+        assert_eq!(
+            shown.chars().skip(at).take(3).collect::<String>(),
+            line[150..153]
+        );
+        // Near the start: cut at the end only.
+        let (shown, at) = window(&line, 10, 3);
+        assert!(!shown.starts_with("...") && shown.ends_with("..."));
+        assert_eq!(at, 10);
+        // Near the end: cut at the start only, the span in the window.
+        let (shown, at) = window(&line, 298, 2);
+        assert!(shown.starts_with("...") && !shown.ends_with("..."));
+        assert_eq!(shown.chars().skip(at).collect::<String>(), line[298..]);
+    }
+
+    /// Thousands of errors: the first [`SHOWN_ERRORS`] are rendered, and a
+    /// line says how many more there are; every one is still counted.
+    #[test]
+    fn a_failure_shows_its_first_errors_and_counts_the_rest() {
+        let text = "x\n".repeat(SHOWN_ERRORS + 20);
+        let loader = MemoryLoader::new().with("stray.pack", text);
+        let failed = check(&loader, &[PathBuf::from("stray.pack")], &Anywhere)
+            .err()
+            .expect("stray lines");
+        assert_eq!(failed.errors.len(), SHOWN_ERRORS + 20);
+        assert_eq!(failed.shown().len(), SHOWN_ERRORS);
+        assert_eq!(failed.not_shown(), 20);
+        let rendered = failed.render();
+        assert_eq!(rendered.matches("error[E001]").count(), SHOWN_ERRORS);
+        assert!(
+            rendered.contains("... and 20 more errors not shown"),
+            "{rendered}"
+        );
     }
 }

@@ -77,14 +77,40 @@ impl Failed {
             .any(|e| matches!(e, Error::Read { .. } | Error::Write { .. }))
     }
 
+    /// The errors shown: the first [`SHOWN_ERRORS`] by position.
+    pub fn shown(&self) -> &[Error] {
+        &self.errors[..self.errors.len().min(SHOWN_ERRORS)]
+    }
+
+    /// How many errors are not shown ([`Failed::shown`]).
+    pub fn not_shown(&self) -> usize {
+        self.errors.len() - self.shown().len()
+    }
+
+    /// The errors shown, rendered for people, and a line saying how many
+    /// more there are.
     pub fn render(&self) -> String {
-        self.errors
+        let mut text = self
+            .shown()
             .iter()
             .map(|e| diagnostic::render(&self.sources, e))
             .collect::<Vec<_>>()
-            .join("\n")
+            .join("\n");
+        let more = self.not_shown();
+        if more > 0 {
+            text.push_str(&format!(
+                "\n... and {more} more error{} not shown: the first {SHOWN_ERRORS} are; fix them and check again\n",
+                if more == 1 { "" } else { "s" }
+            ));
+        }
+        text
     }
 }
+
+/// The most errors a failed compilation shows ([`Failed::render`], and
+/// `--json`): a file of a million stray lines has a million, and echoing
+/// each took gigabytes.
+pub const SHOWN_ERRORS: usize = 100;
 
 fn fail(sources: SourceMap, mut errors: Vec<Error>) -> Failed {
     errors.sort_by_key(|e| e.at());

@@ -39,7 +39,15 @@ pub enum SyntaxError {
     BadNumber { span: Span, found: String },
     #[error("this `{{` is never closed")]
     Unclosed { span: Span },
+    /// So many syntax errors that the rest of the file is not read
+    /// ([`MAX_SYNTAX_ERRORS`]): not a text worth reading line by line.
+    #[error("too many syntax errors: the file is not read past here")]
+    TooMany { span: Span },
 }
+
+/// The syntax errors a file's parse collects before it stops
+/// ([`SyntaxError::TooMany`]).
+pub const MAX_SYNTAX_ERRORS: usize = 1000;
 
 /// A bare length longer than this is taken for a forgotten unit.
 pub const MAX_BARE_METRES: f64 = 3.0;
@@ -53,7 +61,8 @@ impl SyntaxError {
             | SyntaxError::UnexpectedUnit { span, .. }
             | SyntaxError::NotWholeNumber { span, .. }
             | SyntaxError::BadNumber { span, .. }
-            | SyntaxError::Unclosed { span } => *span,
+            | SyntaxError::Unclosed { span }
+            | SyntaxError::TooMany { span } => *span,
         }
     }
 
@@ -67,6 +76,7 @@ impl SyntaxError {
             SyntaxError::NotWholeNumber { .. } => "E005",
             SyntaxError::BadNumber { .. } => "E006",
             SyntaxError::Unclosed { .. } => "E007",
+            SyntaxError::TooMany { .. } => "E001",
         }
     }
 
@@ -80,6 +90,7 @@ impl SyntaxError {
             SyntaxError::NotWholeNumber { .. } => "not a whole number".into(),
             SyntaxError::BadNumber { .. } => "not a number".into(),
             SyntaxError::Unclosed { .. } => "opened here".into(),
+            SyntaxError::TooMany { .. } => "stopped here".into(),
         }
     }
 
@@ -111,6 +122,9 @@ impl SyntaxError {
             SyntaxError::Unclosed { .. } => {
                 Some("close the block with `}` after its last statement".into())
             }
+            SyntaxError::TooMany { .. } => Some(format!(
+                "is this a `.pack` file? fix the first errors and check again (a parse stops after {MAX_SYNTAX_ERRORS})"
+            )),
         }
     }
 }

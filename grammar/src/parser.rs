@@ -1,7 +1,7 @@
 //! From pest's parse tree to the typed AST, collecting every syntax error.
 
 use crate::ast::*;
-use crate::error::{MAX_BARE_METRES, SyntaxError};
+use crate::error::{MAX_BARE_METRES, MAX_SYNTAX_ERRORS, SyntaxError};
 use crate::span::Span;
 use crate::suggest::closest;
 use pest::Parser;
@@ -226,6 +226,13 @@ impl Builder {
         // items too: skip them, up to the line that closes it.
         let mut skipping = false;
         for p in pair.into_inner() {
+            if self.errors.len() >= MAX_SYNTAX_ERRORS {
+                let at = p.as_span().start();
+                self.errors.push(SyntaxError::TooMany {
+                    span: Span::new(at, at),
+                });
+                break;
+            }
             let item = match p.as_rule() {
                 Rule::use_item => self.use_item(p),
                 Rule::cell => self.cell(src, p),
@@ -957,5 +964,31 @@ fn string(p: &P) -> Str {
     Str {
         value,
         span: span(p),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A text of stray lines (a file that is not a `.pack` file) gives
+    /// one error a line up to [`MAX_SYNTAX_ERRORS`], then one saying the
+    /// parse stopped, at the next line: a million stray lines took
+    /// gigabytes to report.
+    #[test]
+    fn a_parse_stops_after_so_many_syntax_errors() {
+        let errors = parse(&"x\n".repeat(MAX_SYNTAX_ERRORS + 500)).expect_err("stray lines");
+        assert_eq!(errors.len(), MAX_SYNTAX_ERRORS + 1);
+        assert!(
+            errors[..MAX_SYNTAX_ERRORS]
+                .iter()
+                .all(|e| matches!(e, SyntaxError::Unexpected { .. }))
+        );
+        let last = errors.last().expect("the stop");
+        assert!(matches!(last, SyntaxError::TooMany { .. }), "{last:?}");
+        assert_eq!(last.span().start, 2 * MAX_SYNTAX_ERRORS as u32);
+        // Fewer errors than that: no stop.
+        let few = parse(&"x\n".repeat(10)).expect_err("stray lines");
+        assert_eq!(few.len(), 10);
     }
 }

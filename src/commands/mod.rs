@@ -19,7 +19,7 @@ use packwright_compiler::{Compiled, Failed, SourceMap, Warning, diagnostic};
 /// on stdout) and picks the exit code.
 pub fn report_failure(failed: &Failed, json: bool) -> Exit {
     if json {
-        for e in &failed.errors {
+        for e in failed.shown() {
             let mut value =
                 serde_json::to_value(diagnostic::to_json(&failed.sources, e)).unwrap_or_default();
             if let Some(obj) = value.as_object_mut() {
@@ -29,7 +29,7 @@ pub fn report_failure(failed: &Failed, json: bool) -> Exit {
         }
         outln!(
             "{}",
-            serde_json::json!({"type": "summary", "errors": failed.errors.len(), "files": failed.sources.files().count()})
+            serde_json::json!({"type": "summary", "errors": failed.errors.len(), "not_shown": failed.not_shown(), "files": failed.sources.files().count()})
         );
     } else {
         err!("{}", failed.render());
