@@ -27,6 +27,23 @@ pub struct Cli {
     pub command: Command,
 }
 
+impl Cli {
+    /// Whether the command was asked for `--json`: an error that stops it
+    /// is then printed on stdout as a JSON object too.
+    pub fn wants_json(&self) -> bool {
+        match &self.command {
+            Command::Check(a) => a.json,
+            Command::Compile(a) => a.json,
+            Command::Show(a) => a.json,
+            Command::Execute(a) => a.json,
+            Command::Demonstrate(a) => a.json,
+            Command::Train(a) => a.json,
+            Command::Eval(a) => a.json,
+            Command::Draw(_) | Command::Fmt(_) | Command::Generate(_) | Command::Chart(_) => false,
+        }
+    }
+}
+
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Check .pack files (and the files they `use`) and report every error.

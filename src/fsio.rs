@@ -154,7 +154,8 @@ fn write_synced(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Replaces `path` with `bytes` atomically. A symbolic link is followed:
+/// Replaces `path` with `bytes` atomically, making its directory when
+/// missing. A symbolic link is followed:
 /// the file it points to is replaced and the link kept. A path that is
 /// not a regular file (a device such as `/dev/null`, a pipe, a terminal)
 /// is written to as it is: renaming a file over it would destroy it.
@@ -189,6 +190,14 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
                 .write_all(bytes)
                 .with_context(|| format!("cannot write {}", path.display()));
         }
+    }
+    // A missing parent directory is made, as `compile` makes its output
+    // directory's.
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty())
+        && !parent.exists()
+    {
+        fs::create_dir_all(parent)
+            .with_context(|| format!("cannot create the directory {}", parent.display()))?;
     }
     remove_stale_siblings(path);
     let tmp = sibling(path, "tmp");

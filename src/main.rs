@@ -3,15 +3,20 @@
 
 use clap::Parser;
 use packwright::cli::Cli;
-use packwright::errln;
+use packwright::{errln, outln};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let json = cli.wants_json();
     match packwright::run(cli) {
         Ok(code) => code.into(),
         Err(e) => {
             errln!("error: {e:#}");
+            if json {
+                let error = serde_json::json!({"type": "error", "message": format!("{e:#}")});
+                outln!("{error}");
+            }
             packwright::Exit::Failure.into()
         }
     }

@@ -371,8 +371,70 @@ fn eval_refuses_a_model_it_cannot_use_before_running_anything() {
             "--json",
         ]);
         assert_eq!(out.status.code(), Some(2), "{bad}");
-        assert!(out.stdout.is_empty(), "{bad}: nothing measured");
+        // Nothing measured: with `--json`, the error alone, as JSON.
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let error: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON object");
+        assert_eq!(error["type"], "error", "{bad}: {stdout}");
+        assert!(
+            error["message"].as_str().is_some_and(|m| m.contains(&bad)),
+            "{stdout}"
+        );
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(&bad), "{bad}: {err}");
     }
+}
+
+/// What `eval` measured is printed before its files are written: a
+/// `--markdown` path whose directory is missing gets it made (as
+/// `compile` makes its output's), and a path that cannot be written
+/// fails after the tables are out (a helper's probe: a run's results
+/// lost to a typo in the path). A suite the files do not define, with
+/// `--json`, is a JSON error on stdout as well as the message on stderr.
+#[test]
+fn eval_prints_what_it_measured_before_writing_its_files() {
+    let dir = scratch("reliability", "eval-markdown");
+    let md = dir.join("not").join("yet").join("table.md");
+    let args = |md: &str| {
+        packwright(&[
+            "eval",
+            "orders/suites/measure.pack",
+            "--suite",
+            "m_case1_2of3",
+            "--limit",
+            "1",
+            "--markdown",
+            md,
+        ])
+    };
+    let out = args(&md.display().to_string());
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = fs::read_to_string(&md).expect("written where its directory was missing");
+    assert_eq!(String::from_utf8_lossy(&out.stdout), table);
+    // A file where the directory should be: the write fails, the table
+    // is out.
+    let blocked = dir.join("file");
+    fs::write(&blocked, "a file").expect("written");
+    let out = args(&blocked.join("table.md").display().to_string());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("m_case1_2of3"));
+    let out = packwright(&[
+        "eval",
+        "orders/suites/measure.pack",
+        "--suite",
+        "nosuch",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let error: serde_json::Value = serde_json::from_slice(&out.stdout).expect("a JSON error");
+    assert_eq!(error["type"], "error");
+    assert!(
+        error["message"]
+            .as_str()
+            .is_some_and(|m| m.contains("nosuch"))
+    );
 }

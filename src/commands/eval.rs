@@ -218,12 +218,6 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
         table.push_str("\nOver every suite of the run:\n\n");
         table.push_str(&markdown(&totals));
     }
-    if let Some(dir) = &args.plots {
-        write_plots(dir, &rows, &all_results)?;
-    }
-    if let Some(path) = &args.markdown {
-        write_file_atomically(path, table.as_bytes())?;
-    }
     let machine = Machine {
         cpus: std::thread::available_parallelism()
             .map(usize::from)
@@ -242,6 +236,14 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
         outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         out!("{table}");
+    }
+    // Written after the results are printed: a path that cannot be
+    // written loses nothing the run measured.
+    if let Some(dir) = &args.plots {
+        write_plots(dir, &rows, &all_results)?;
+    }
+    if let Some(path) = &args.markdown {
+        write_file_atomically(path, table.as_bytes())?;
     }
     Ok(Exit::Success)
 }
