@@ -288,4 +288,9 @@ fn demonstrations_in_random_order_teach_the_inventorys_order() {
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("follow no one order"), "{stderr}");
+    // Said all the same: the model's own order is followed.
+    assert!(
+        stderr.contains("no demonstration in the files orders cell"),
+        "{stderr}"
+    );
 }

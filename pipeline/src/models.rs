@@ -73,10 +73,14 @@ pub fn choose_planner(
 /// What [`follow_cell_rule`] did.
 #[derive(Debug, Clone, PartialEq)]
 pub enum CellRule {
-    /// The model was taught the cell, or the compilation holds no
-    /// demonstration of it, or they follow the model's own rule: the
-    /// model's rule is kept.
-    Kept,
+    /// The model was taught the cell: its rule is kept.
+    Taught,
+    /// The compilation holds no demonstration of the cell that orders
+    /// it (none, or only `sequence random` ones): the model's rule is
+    /// kept.
+    Undemonstrated,
+    /// The cell's demonstrations follow the model's own rule.
+    Same(SequenceRule),
     /// The model now follows the rule the cell's demonstrations show.
     Followed(SequenceRule),
     /// The cell's demonstrations follow no one rule (as `sequence random`
@@ -90,14 +94,15 @@ pub enum CellRule {
 /// packs each in the order its own file teaches.
 pub fn follow_cell_rule(nets: &mut Networks, compiled: &Compiled, cell: &str) -> CellRule {
     if taught(nets, cell) {
-        return CellRule::Kept;
+        return CellRule::Taught;
     }
     match crate::teach::cell_rule(compiled, cell) {
         Ok(Some(inferred)) if inferred.rule != nets.task.sequence => {
             nets.task.sequence = inferred.rule.clone();
             CellRule::Followed(inferred.rule)
         }
-        Ok(_) => CellRule::Kept,
+        Ok(Some(inferred)) => CellRule::Same(inferred.rule),
+        Ok(None) => CellRule::Undemonstrated,
         Err(_) => CellRule::NoRule,
     }
 }

@@ -332,7 +332,13 @@ fn print_report(name: &str, report: &Report, clock: &str) {
 /// that cell's own demonstrations decided it ([`follow_cell_rule`]).
 pub fn note_cell_rule(cell: &str, what: &CellRule, model_rule: &SequenceRule) {
     match what {
-        CellRule::Kept => {}
+        CellRule::Taught => {}
+        CellRule::Undemonstrated => errln!(
+            "note: no demonstration in the files orders cell `{cell}`: the learned planner packs it in the model's own order, {model_rule}"
+        ),
+        CellRule::Same(rule) => errln!(
+            "note: the file's demonstrations of cell `{cell}` follow the order {rule}, the model's own: the learned planner packs it so"
+        ),
         CellRule::Followed(rule) => errln!(
             "note: the file's demonstrations of cell `{cell}` follow the order {rule}: the learned planner packs it so"
         ),
