@@ -11,13 +11,13 @@ use unicode_width::UnicodeWidthChar;
 /// Renders one error as text, in the style of rustc:
 ///
 /// ```text
-/// error[E021]: unknown product `F`
+/// error[E021]: unknown product `gren`
 ///   --> orders/acme.pack:12:3
 ///    |
-/// 12 |   F -> g1
-///    |   ^ not found in inventory `stock5`
+/// 12 |   gren -> g1
+///    |   ^^^^ not found in inventory `stock5`
 ///    |
-///    = help: did you mean `E`?
+///    = help: did you mean `green`?
 /// ```
 pub fn render(sources: &SourceMap, error: &Error) -> String {
     let mut out = String::new();

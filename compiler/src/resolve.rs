@@ -298,10 +298,16 @@ impl Resolver<'_> {
         false
     }
 
+    /// A bare mass this large is taken for grams in the fix
+    /// ([`Resolver::mass_in_range`]).
+    const GRAMS_LIKELY: f64 = 100.0;
+
     /// Whether a product's mass `kg` is one the robot world handles: from
     /// [`MIN_MASS`] (the simulator's lightest) to [`MAX_MASS`] (the UR10's
-    /// rated payload); else an error saying so.
-    fn mass_in_range(&mut self, kg: f64, at: Loc) -> bool {
+    /// rated payload); else an error saying so (a bare number in range
+    /// as grams: "did you mean `300 g`?").
+    fn mass_in_range(&mut self, mass: &ast::Mass, at: Loc) -> bool {
+        let kg = mass.kg;
         if (MIN_MASS..=MAX_MASS).contains(&kg) {
             return true;
         }
@@ -310,10 +316,24 @@ impl Resolver<'_> {
         } else {
             "a mass must be at most 10 kg"
         };
+        let range = "a mass from 0.001 (1 g) to 10 kg: the simulator models products from 1 g, and a UR10 carries at most 10 kg (its rated payload)";
+        // A bare 100 or more is no product's kilograms, and in range as
+        // grams (40 might be an anvil's kilograms).
+        let grams = mass.unit.is_none()
+            && kg >= Self::GRAMS_LIKELY
+            && (MIN_MASS..=MAX_MASS).contains(&(kg / 1000.0));
+        let fix = if grams {
+            format!(
+                "a bare mass is in kilograms: did you mean `{} g`? Write {range}",
+                mass.number
+            )
+        } else {
+            format!("write {range}")
+        };
         self.errors.push(Error::BadGeometry {
             at,
             what: what.into(),
-            fix: "write a mass from 0.001 (1 g) to 10 kg: the simulator models products from 1 g, and a UR10 carries at most 10 kg (its rated payload)".into(),
+            fix,
         });
         false
     }
@@ -720,7 +740,7 @@ impl Resolver<'_> {
                 Loc::new(f, m.span),
                 "a mass",
                 "write the mass in kilograms, above zero (`mass 0.3`)",
-            ) && self.mass_in_range(m.kg, Loc::new(f, m.span)))
+            ) && self.mass_in_range(m, Loc::new(f, m.span)))
         {
             return;
         }

@@ -29,7 +29,7 @@ pub enum SyntaxError {
     MissingUnit { span: Span, number: String },
     #[error("{what} takes a plain number, without a unit")]
     UnexpectedUnit { span: Span, what: &'static str },
-    #[error("{what} must be a whole number, found `{found}`")]
+    #[error("{what} must be a whole number, 0 or more, found `{found}`")]
     NotWholeNumber {
         span: Span,
         what: &'static str,
@@ -105,6 +105,12 @@ impl SyntaxError {
                 expected, found, ..
             } if expected == "`to`" && found.starts_with("`-") => Some(
                 "a range is written with `to`, as in `human packs 1 to 2` (`-2` reads as minus two)"
+                    .into(),
+            ),
+            SyntaxError::Unexpected {
+                expected, found, ..
+            } if found == "end of file" && expected == "`{`" => Some(
+                "the file ends before the block opens: add `{`, the block's statements, and `}`"
                     .into(),
             ),
             SyntaxError::Unexpected { found, .. } if found == "end of file" => Some(

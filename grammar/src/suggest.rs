@@ -30,7 +30,10 @@ pub fn closest<'a, I>(word: &str, candidates: I) -> Option<&'a str>
 where
     I: IntoIterator<Item = &'a str>,
 {
-    let limit = (word.chars().count() / 3).max(1);
+    // A name of one or two characters is within one edit of every other
+    // such name (`D` for `A`): only another case of it is suggested.
+    let len = word.chars().count();
+    let limit = if len < 3 { 0 } else { (len / 3).max(1) };
     let lower = word.to_lowercase();
     candidates
         .into_iter()
@@ -44,6 +47,17 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One- and two-character names get no suggestion from another name
+    /// one edit away (a helper's `D -> g2` was told "did you mean `A`?",
+    /// A already in the order), only another case of themselves.
+    #[test]
+    fn short_names_are_not_matched_to_any_other_short_name() {
+        assert_eq!(closest("D", ["A", "B", "C"]), None);
+        assert_eq!(closest("d", ["A", "D"]), Some("D"));
+        assert_eq!(closest("g3", ["g1", "g2"]), None);
+        assert_eq!(closest("slto", ["slot", "s1"]), Some("slot"));
+    }
 
     #[test]
     fn distances() {
@@ -63,7 +77,7 @@ mod tests {
         assert_eq!(closest("stok5", names), Some("stock5"));
         assert_eq!(closest("Bench", names), Some("bench"));
         assert_eq!(closest("tray", names), None);
-        assert_eq!(closest("g6", ["g1", "g2"]), Some("g1"));
+        assert_eq!(closest("g6", ["g1", "g2"]), None);
         assert_eq!(closest("slto", ["box", "slot", "lift"]), Some("slot"));
     }
 }
