@@ -346,8 +346,11 @@ pub struct TrainArgs {
     /// Seed of the initial weights, the split and the batches.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Most epochs per network (early stopping on the held-out split
-    /// usually ends sooner).
+    /// Epochs per network over which the learning rate falls tenfold
+    /// (early stopping on the held-out split usually ends sooner); a
+    /// network still improving at N goes on at the final rate until a
+    /// shorter plateau, to 2N epochs at most ("best epoch 2/2" for
+    /// `--epochs 1`).
     #[arg(long, value_name = "N")]
     pub epochs: Option<usize>,
     /// DAgger rounds for the dynamics policy (default 2; 0 learns from the

@@ -80,6 +80,9 @@ fn snippet(out: &mut String, sources: &SourceMap, at: Loc, label: &str) -> usize
     let span_text = file.text.get(at.span.range()).unwrap_or("");
     let on_line = span_text.split('\n').next().unwrap_or("");
     let (text, start_char) = window(full, col - 1, on_line.chars().count());
+    // Invisible characters (a NUL, a zero-width space) shown in their
+    // place, one for one, so that the carets line up.
+    let text: String = text.chars().map(packwright_grammar::shown).collect();
     let _ = writeln!(out, "{number} | {text}");
     // Carets under the span's part on this line (at least one, and no
     // more than the window shows), in terminal columns: a wide character
@@ -241,8 +244,8 @@ mod tests {
         let text = "x\n".repeat(SHOWN_ERRORS + 20);
         let loader = MemoryLoader::new().with("stray.pack", text);
         let failed = check(&loader, &[PathBuf::from("stray.pack")], &Anywhere)
-            .err()
-            .expect("stray lines");
+            .map(|_| ())
+            .expect_err("stray lines");
         assert_eq!(failed.errors.len(), SHOWN_ERRORS + 20);
         assert_eq!(failed.shown().len(), SHOWN_ERRORS);
         assert_eq!(failed.not_shown(), 20);

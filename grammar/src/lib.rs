@@ -8,9 +8,11 @@ mod format;
 mod parser;
 mod span;
 mod suggest;
+mod visible;
 
 pub use error::{MAX_BARE_METRES, SyntaxError};
 pub use format::{format, format_file};
 pub use parser::parse;
 pub use span::{LineIndex, Span};
 pub use suggest::{closest, edit_distance};
+pub use visible::{is_invisible, named, shown};

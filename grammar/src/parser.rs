@@ -211,7 +211,7 @@ fn token_at(src: &str, pos: usize) -> (String, Span) {
             .sum();
         return (format!("`{}`", &rest[..len]), Span::new(pos, pos + len));
     }
-    (format!("`{c}`"), Span::new(pos, pos + c.len_utf8()))
+    (crate::visible::named(c), Span::new(pos, pos + c.len_utf8()))
 }
 
 struct Builder {
@@ -266,6 +266,20 @@ impl Builder {
     fn bad_item(&mut self, src: &str, p: &P) {
         let text = p.as_str();
         let start = p.as_span().start();
+        // Where the parser was, by the item's first word: a product line
+        // missing its shape is "in a product", not "at the top level".
+        let context = match text.split_whitespace().next() {
+            Some("use") => "in a `use`",
+            Some("cell") => "in a cell",
+            Some("product") => "in a product",
+            Some("inventory") => "in an inventory",
+            Some("order") => "in an order",
+            Some("demo") => "in a demo",
+            Some("demos") => "in a `demos` block",
+            Some("scenario") => "in a scenario",
+            Some("scenarios") => "in a `scenarios` block",
+            _ => "at the top level",
+        };
         let unclosed = text.matches('{').count() > text.matches('}').count();
         match PackParser::parse(Rule::item_only, text) {
             Err(e) => {
@@ -281,12 +295,10 @@ impl Builder {
                     Some(brace) if unclosed && at_end => self.errors.push(SyntaxError::Unclosed {
                         span: Span::new(start + brace, start + brace + 1),
                     }),
-                    _ => self
-                        .errors
-                        .push(from_pest(src, e, start, "at the top level")),
+                    _ => self.errors.push(from_pest(src, e, start, context)),
                 }
             }
-            Ok(_) => self.reparse(src, Rule::item_only, p, "at the top level"),
+            Ok(_) => self.reparse(src, Rule::item_only, p, context),
         }
     }
 
