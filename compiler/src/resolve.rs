@@ -283,6 +283,10 @@ pub const MIN_MASS: f64 = 0.001;
 /// The heaviest product mass, kilograms: the UR10's rated payload.
 pub const MAX_MASS: f64 = 10.0;
 
+/// The largest side a product may have (m): a box of it held by the cup
+/// would reach past the UR10's 1.3 m from any slot.
+pub const MAX_PRODUCT_SIZE: f64 = 1.0;
+
 impl Resolver<'_> {
     /// Whether `value` is above zero; else an error saying that `what`
     /// must be, and how to write it (`fix`).
@@ -732,6 +736,40 @@ impl Resolver<'_> {
                 "every product dimension",
                 POSITIVE_LENGTH,
             );
+            return;
+        }
+        // A product larger than the arm could ever carry into a box is a
+        // unit slip (`60 m` for `60 mm`): said on its own line, rather
+        // than as its overlaps and misfits everywhere it is used.
+        let lengths: Vec<&ast::Length> = match &p.shape {
+            ast::Shape::Cube(l) => vec![l],
+            ast::Shape::Box(s) => [Some(&s.x), Some(&s.y), s.z.as_ref()]
+                .into_iter()
+                .flatten()
+                .collect(),
+        };
+        let oversized: Vec<&ast::Length> = lengths
+            .into_iter()
+            .filter(|l| l.metres > MAX_PRODUCT_SIZE)
+            .collect();
+        for l in &oversized {
+            // `60 m` for `60 mm` is a slip of the unit; `1.2 m` could be
+            // 120 mm or 12 cm: no guess.
+            let whole = !l.number.contains('.');
+            let fix = match l.unit {
+                Some(ast::LengthUnit::M) if whole => format!(
+                    "did you mean `{} mm`? A product is at most 1 m on a side: the UR10 reaches 1.3 m",
+                    l.number
+                ),
+                _ => "check the unit (sizes are metres unless they carry `mm` or `cm`): a product is at most 1 m on a side, the UR10 reaches 1.3 m".to_owned(),
+            };
+            self.errors.push(Error::BadGeometry {
+                at: Loc::new(f, l.span),
+                what: "a product side must be at most 1 m".into(),
+                fix,
+            });
+        }
+        if !oversized.is_empty() {
             return;
         }
         if let Some(m) = &p.mass
