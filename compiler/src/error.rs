@@ -73,7 +73,7 @@ pub enum Error {
         at: Loc,
         item: String,
         statement: &'static str,
-        example: &'static str,
+        example: String,
     },
     #[error("`{statement}` is given twice")]
     StatementTwice {

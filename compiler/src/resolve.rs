@@ -147,7 +147,7 @@ impl<T> Once<T> {
         self,
         block: Loc,
         item: String,
-        example: &'static str,
+        example: impl Into<String>,
         errors: &mut Vec<Error>,
     ) -> Option<T> {
         if self.value.is_none() {
@@ -155,7 +155,7 @@ impl<T> Once<T> {
                 at: block,
                 item,
                 statement: self.statement,
-                example,
+                example: example.into(),
             });
         }
         self.get()
@@ -664,7 +664,7 @@ impl Resolver<'_> {
                 at: block,
                 item: item.clone(),
                 statement: "box",
-                example: "box tray (0.00, 0.65) size (0.40, 0.30, 0.08)",
+                example: "box tray (0.00, 0.65) size (0.40, 0.30, 0.08)".into(),
             });
             ok = false;
         } else if slots.is_empty() {
@@ -672,7 +672,7 @@ impl Resolver<'_> {
                 at: block,
                 item,
                 statement: "slot",
-                example: "slot g1 (0.00, 0.60)",
+                example: "slot g1 (0.00, 0.60)".into(),
             });
             ok = false;
         }
@@ -831,7 +831,7 @@ impl Resolver<'_> {
                 at: Loc::new(f, inv.span),
                 item: format!("inventory `{}`", inv.name.text),
                 statement: "PRODUCT (x, y)",
-                example: "A (0.50, -0.20)",
+                example: "A (0.50, -0.20)".into(),
             });
             ok = false;
         }
@@ -977,7 +977,7 @@ impl Resolver<'_> {
                 at: Loc::new(f, o.span),
                 item: format!("order `{}`", o.name.text),
                 statement: "PRODUCT -> SLOT",
-                example: "A -> g1",
+                example: "A -> g1".into(),
             });
             ok = false;
         }
@@ -1052,8 +1052,18 @@ impl Resolver<'_> {
         }
         let block = Loc::new(f, d.span);
         let item = format!("demo `{}`", d.name.text);
-        let Some((names, seq_span)) =
-            sequence.required(block, item, "sequence A, C, E", &mut self.errors)
+        // The example lists the order's own products.
+        let products: Vec<&str> = self.model.orders[order]
+            .assignment
+            .iter()
+            .filter_map(|a| self.model.inventories[inv].entries.get(a.entry))
+            .map(|e| self.model.products[e.product].name.as_str())
+            .collect();
+        let example = match products.as_slice() {
+            [] => "sequence A, C, E".to_owned(),
+            names => format!("sequence {}", names.join(", ")),
+        };
+        let Some((names, seq_span)) = sequence.required(block, item, example, &mut self.errors)
         else {
             return;
         };
