@@ -37,6 +37,15 @@ pub enum SyntaxError {
     },
     #[error("`{found}` is not a number")]
     BadNumber { span: Span, found: String },
+    /// A number written with an exponent (`5e-2`), which the language
+    /// does not read.
+    #[error("`{written}` is written with an exponent")]
+    Exponent {
+        span: Span,
+        written: String,
+        /// The number without one (`0.05`).
+        plain: String,
+    },
     #[error("this `{{` is never closed")]
     Unclosed { span: Span },
     /// So many syntax errors that the rest of the file is not read
@@ -61,6 +70,7 @@ impl SyntaxError {
             | SyntaxError::UnexpectedUnit { span, .. }
             | SyntaxError::NotWholeNumber { span, .. }
             | SyntaxError::BadNumber { span, .. }
+            | SyntaxError::Exponent { span, .. }
             | SyntaxError::Unclosed { span }
             | SyntaxError::TooMany { span } => *span,
         }
@@ -74,7 +84,7 @@ impl SyntaxError {
             SyntaxError::MissingUnit { .. } => "E003",
             SyntaxError::UnexpectedUnit { .. } => "E004",
             SyntaxError::NotWholeNumber { .. } => "E005",
-            SyntaxError::BadNumber { .. } => "E006",
+            SyntaxError::BadNumber { .. } | SyntaxError::Exponent { .. } => "E006",
             SyntaxError::Unclosed { .. } => "E007",
             SyntaxError::TooMany { .. } => "E001",
         }
@@ -89,6 +99,7 @@ impl SyntaxError {
             SyntaxError::UnexpectedUnit { .. } => "unit not allowed here".into(),
             SyntaxError::NotWholeNumber { .. } => "not a whole number".into(),
             SyntaxError::BadNumber { .. } => "not a number".into(),
+            SyntaxError::Exponent { .. } => "an exponent".into(),
             SyntaxError::Unclosed { .. } => "opened here".into(),
             SyntaxError::TooMany { .. } => "stopped here".into(),
         }
@@ -125,6 +136,9 @@ impl SyntaxError {
             SyntaxError::UnexpectedUnit { .. } => Some("remove the unit".into()),
             SyntaxError::NotWholeNumber { .. } => Some("write a whole number such as `3`".into()),
             SyntaxError::BadNumber { .. } => Some("write a number such as `0.25` or `-12`".into()),
+            SyntaxError::Exponent { plain, .. } => Some(format!(
+                "write `{plain}`: numbers are written without an exponent"
+            )),
             SyntaxError::Unclosed { .. } => {
                 Some("close the block with `}` after its last statement".into())
             }

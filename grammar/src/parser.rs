@@ -135,6 +135,37 @@ fn describe(rule: Rule) -> Option<&'static str> {
 }
 
 /// Turns a pest error on `src[offset..]` into a syntax error located in `src`.
+/// A number in scientific notation (`5e-2`, `1E3`) that the parse broke
+/// at its exponent (`5` read with the unit `e`, then `-2` unexpected):
+/// the whole literal's span, the literal and the number written plainly
+/// (`0.05`), when the text at `at` is the exponent of one.
+fn scientific(src: &str, at: Span) -> Option<(Span, String, String)> {
+    let exponent = src.get(at.start as usize..at.end as usize)?;
+    let before = src.get(..at.start as usize)?;
+    let mantissa_end = before.strip_suffix(['e', 'E'])?;
+    let mantissa_start = mantissa_end
+        .char_indices()
+        .rev()
+        .take_while(|(_, c)| c.is_ascii_digit() || *c == '.' || *c == '-')
+        .last()
+        .map(|(i, _)| i)?;
+    let mantissa = &mantissa_end[mantissa_start..];
+    if !mantissa.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '.')
+        || !exponent
+            .trim_start_matches(['-', '+'])
+            .chars()
+            .all(|c| c.is_ascii_digit())
+    {
+        return None;
+    }
+    let written = format!("{mantissa}{}{exponent}", &before[mantissa_end.len()..]);
+    let value: f64 = written.parse().ok()?;
+    let span = Span::new(mantissa_start, at.end as usize);
+    value
+        .is_finite()
+        .then(|| (span, written, format!("{value}")))
+}
+
 fn from_pest(
     src: &str,
     e: pest::error::Error<Rule>,
@@ -170,6 +201,13 @@ fn from_pest(
     let (found, found_span) = token_at(src, pos);
     if expected == ["a quoted string"] && found == "the end of the line" {
         expected = vec!["a closing `\"` (strings end on the line they start)"];
+    }
+    if let Some((span, written, plain)) = scientific(src, found_span) {
+        return SyntaxError::Exponent {
+            span,
+            written,
+            plain,
+        };
     }
     let suggestion = if found.starts_with('`') {
         closest(found.trim_matches('`'), keywords.iter().copied()).map(str::to_owned)
@@ -987,6 +1025,31 @@ mod tests {
     /// one error a line up to [`MAX_SYNTAX_ERRORS`], then one saying the
     /// parse stopped, at the next line: a million stray lines took
     /// gigabytes to report.
+    /// `5e-2` is read as `5` with the unit `e`, then `-2`: the error
+    /// suggests the number written plainly.
+    #[test]
+    fn a_number_in_scientific_notation_gets_it_written_plainly() {
+        for (text, plain) in [
+            ("product q cube 5e-2\n", "0.05"),
+            ("product q cube 5E1 mm\n", "50"),
+            ("product q cube 2.5e-2 mass 1\n", "0.025"),
+        ] {
+            let errors = parse(text).expect_err(text);
+            let first = errors.first().expect("an error");
+            assert_eq!(first.code(), "E006");
+            let help = first.help().unwrap_or_default();
+            assert!(
+                help.starts_with(&format!("write `{plain}`")),
+                "{text}: {help}"
+            );
+            // The caret is under the whole number.
+            let span = first.span();
+            let under = &text[span.start as usize..span.end as usize];
+            assert!(under.starts_with(|c: char| c.is_ascii_digit()), "{under}");
+            assert!(under.contains(['e', 'E']), "{under}");
+        }
+    }
+
     #[test]
     fn a_parse_stops_after_so_many_syntax_errors() {
         let errors = parse(&"x\n".repeat(MAX_SYNTAX_ERRORS + 500)).expect_err("stray lines");
