@@ -53,6 +53,12 @@ const RETREAT_VIAS: usize = 5;
 /// the centre line).
 const FINE_RETREAT_VIAS: usize = 20;
 
+/// How many [`RAISE_STEP`]s a carried point or a hover is raised by
+/// while every way of [`Learned::rollout`] is tried
+/// ([`Learned::raised_over`]; the straight way alone up to
+/// [`MAX_CARRY_RAISES`]).
+const ALL_WAYS_RAISES: u32 = 20;
+
 /// What stopped a learned run early.
 enum Halt {
     Violation(Violation),
@@ -365,7 +371,7 @@ impl<W: World> Learned<'_, W> {
     /// the sub-goal's budget lasts): first the lowest height whose steps'
     /// end joined straight is free (one check a height), then, where none
     /// is, the lowest that [`Learned::rollout`] reaches by any of its
-    /// ways. Most heights under something standing in the way fail, and
+    /// ways, up to [`ALL_WAYS_RAISES`] steps up. Most heights under something standing in the way fail, and
     /// each of the other ways is a motion of its own to blend and check
     /// (measured on a florist's cell with 250-280 mm vases: 8 to 12
     /// heights tried, 3 to 17 ms each).
@@ -391,7 +397,15 @@ impl<W: World> Learned<'_, W> {
                 )
                 .ok()
             })
-            .or_else(|| self.raised(start, goal, tolerance, load, over, first_action_us))
+            .or_else(|| {
+                // Every way, at the lower heights only: at each, the
+                // descent's vias, the steps and the level way are motions
+                // of their own to blend and check (a box right behind the
+                // base, the upper arm over its wall at every height: 50
+                // heights took 0.75 s).
+                let lower = (goal[2], goal[2] + RAISE_STEP * f64::from(ALL_WAYS_RAISES));
+                self.raised(start, goal, tolerance, load, lower, first_action_us)
+            })
     }
 
     /// The heights a release at height `from` is raised to, [`RAISE_STEP`]
