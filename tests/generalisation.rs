@@ -617,6 +617,29 @@ fn a_product_standing_close_to_its_neighbours_is_lifted_out_from_between_them() 
     }
 }
 
+/// Two products 0.3 mm apart (tests/cells/touching.pack): no lift takes
+/// the first out, and the failure says why: the lift's pose is free, its
+/// straight motion meets the neighbour (it said only "unreachable").
+#[test]
+fn a_lift_that_cannot_leave_its_neighbour_says_what_it_meets() {
+    let out = packwright(&[
+        "execute",
+        "tests/cells/touching.pack",
+        "--order",
+        "pair",
+        "--planner",
+        "expert",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
+    let report = json(&out);
+    let reason = &report["products"][0]["reason"];
+    assert_eq!(reason["kind"], "unreachable", "{report}");
+    assert_eq!(reason["subgoal"], 3, "{report}");
+    assert_eq!(reason["way"]["a"], "held:p1", "{report}");
+    assert_eq!(reason["way"]["b"], "product:p4", "{report}");
+}
+
 /// A kiosk's mailer beside the robot base (tests/cells/kiosk.pack, slots
 /// 0.33-0.37 m from its axis). The bundled model's steps towards the
 /// point above a slot spiral in there, each turning the tip's way a few

@@ -145,6 +145,11 @@ pub enum Failure {
         /// can be put there at all (every pose that does collides).
         #[serde(skip_serializing_if = "Option::is_none")]
         met: Option<Hit>,
+        /// A release or a lift, whose pose is free: what the straight
+        /// motion there from where the arm is meets (a lifted product its
+        /// neighbour, the held product a box's wall).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        way: Option<Box<Hit>>,
     },
     /// RRT-Connect found no path to the sub-goal.
     NoPath { subgoal: usize },
@@ -193,15 +198,23 @@ impl From<WorldError> for Failure {
 impl fmt::Display for Failure {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Failure::Unreachable { subgoal, tip, met } => {
+            Failure::Unreachable {
+                subgoal,
+                tip,
+                met,
+                way,
+            } => {
                 write!(
                     f,
                     "sub-goal {subgoal} at ({:.3}, {:.3}, {:.3}) is unreachable",
                     tip[0], tip[1], tip[2]
                 )?;
-                match met {
-                    Some(hit) => write!(f, ": every arm pose there collides ({hit})"),
-                    None => Ok(()),
+                match (met, way) {
+                    (Some(hit), _) => write!(f, ": every arm pose there collides ({hit})"),
+                    (None, Some(hit)) => {
+                        write!(f, ": the straight motion there collides ({hit})")
+                    }
+                    (None, None) => Ok(()),
                 }
             }
             Failure::NoPath { subgoal } => {

@@ -496,10 +496,20 @@ impl<'a, W: World> Station<'a, W> {
                 let met = solutions(&self.checker, tip, yaw, from)
                     .first()
                     .and_then(|q| self.checker.check(q, load.held, load.ignore));
+                // A release or a lift whose pose is free: what its
+                // straight motion meets.
+                let way = (met.is_none() && (goal.suction == Suction::Off || lifting))
+                    .then(|| reach(&self.checker, tip, yaw, from, load))
+                    .flatten()
+                    .and_then(|q| match self.checked(k, *from, &[q], load) {
+                        Err(Failure::WouldCollide { hit, .. }) => Some(Box::new(hit)),
+                        _ => None,
+                    });
                 Failure::Unreachable {
                     subgoal: k,
                     tip: goal.tip,
                     met,
+                    way,
                 }
             })
     }
