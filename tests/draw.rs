@@ -185,6 +185,27 @@ fn bad_requests_name_what_exists() {
     let o = packwright(&["draw", "tests/cases/err/syntax_missing_paren.pack"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(o.stdout.is_empty());
+    // Said, not silent: a helper's probe found no word of the missing
+    // picture.
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no picture written"));
+    // A file with no cell: said so, not "0 cells: name one".
+    let dir = scratch("draw", "no-cell");
+    let empty = dir.join("empty.pack");
+    fs::write(&empty, "").expect("written");
+    let o = packwright(&["draw", &empty.display().to_string()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no cell to draw"));
+    // A generator check's error (E045, jitter that cannot place a
+    // product): the picture is drawn and the exit code is check's.
+    let o = packwright(&["draw", "tests/cases/err/jitter_impossible.pack"]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    is_svg(&String::from_utf8_lossy(&o.stdout));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("E045"));
 }
 
 #[test]

@@ -70,6 +70,15 @@ pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
         (diagnostics, warnings) = workspace::check(&model, &RobotWorkspace::new());
         super::report_warnings(&loaded.sources, &warnings, false);
     }
+    // What `check` finds in the generators (E045-E048) too, listed under
+    // the picture, so that draw's exit code is check's. A scenario's
+    // picture expands them below.
+    if diagnostics.is_empty()
+        && args.scenario.is_none()
+        && let Err(errors) = expand::expand(&model)
+    {
+        diagnostics = errors;
+    }
     let subject = if let Some(name) = &args.scenario {
         if !diagnostics.is_empty() {
             errln!("a scenario is drawn only from files without diagnostics:");
@@ -113,6 +122,8 @@ pub fn run(args: &DrawArgs) -> anyhow::Result<Exit> {
         Subject::Cell(c)
     } else if model.cells.len() == 1 {
         Subject::Cell(0)
+    } else if model.cells.is_empty() {
+        bail!("the files define no cell to draw");
     } else {
         bail!(
             "the files define {} cells: name one with --cell NAME ({})",
@@ -196,7 +207,9 @@ fn failed(sources: packwright_compiler::SourceMap, mut errors: Vec<Error>) -> Fa
 }
 
 fn refuse(sources: packwright_compiler::SourceMap, errors: Vec<Error>) -> Exit {
-    super::report_failure(&failed(sources, errors), false)
+    let exit = super::report_failure(&failed(sources, errors), false);
+    errln!("no picture written: a picture is drawn from files that parse and whose names resolve");
+    exit
 }
 
 /// The picture of `subject`, with the diagnostics that belong to it

@@ -352,6 +352,7 @@ pub fn note_cell_rule(cell: &str, what: &CellRule, model_rule: &SequenceRule) {
 /// the first three and how many more.
 fn taught_cells(cells: &[String]) -> String {
     match cells {
+        [] => "its config.json names no cell it was taught".to_owned(),
         [one] => format!("it was taught `{one}`"),
         _ if cells.len() <= 4 => format!("it was taught {}", cells.join(", ")),
         _ => format!(
