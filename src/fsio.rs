@@ -3,7 +3,7 @@
 //! into place; siblings left by killed runs are removed by the next one).
 
 use anyhow::{Context, bail};
-use packwright_compiler::{Artifact, Loader, Output, OutputFile};
+use packwright_compiler::{Artifact, Loader, Output, OutputFile, Unreadable};
 use std::fs;
 use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
@@ -15,18 +15,19 @@ pub const MAX_SOURCE_BYTES: u64 = 16 << 20;
 /// Reads a source file: at most [`MAX_SOURCE_BYTES`], UTF-8 text. The
 /// error says why for people ("no such file", "not UTF-8 text", "larger
 /// than 16 MiB").
-pub fn read_source(path: &Path) -> Result<String, String> {
+pub fn read_source(path: &Path) -> Result<String, Unreadable> {
+    let other = |reason: &str| Unreadable::Other(reason.to_owned());
     let describe = |e: std::io::Error| match e.kind() {
-        ErrorKind::NotFound => "no such file".to_owned(),
-        ErrorKind::InvalidData => "not UTF-8 text".to_owned(),
-        _ => e.to_string(),
+        ErrorKind::NotFound => Unreadable::Missing,
+        ErrorKind::InvalidData => other("not UTF-8 text"),
+        _ => Unreadable::Other(e.to_string()),
     };
     if path.is_dir() {
-        return Err(if path.join("manifest.json").is_file() {
-            "a compiled directory, not a .pack file: give the .pack files it was compiled from (`train` and `show` read compiled directories)".to_owned()
+        return Err(other(if path.join("manifest.json").is_file() {
+            "a compiled directory, not a .pack file: give the .pack files it was compiled from (`train` and `show` read compiled directories)"
         } else {
-            "a directory, not a .pack file".to_owned()
-        });
+            "a directory, not a .pack file"
+        }));
     }
     let file = fs::File::open(path).map_err(describe)?;
     let mut bytes = Vec::new();
@@ -34,12 +35,12 @@ pub fn read_source(path: &Path) -> Result<String, String> {
         .read_to_end(&mut bytes)
         .map_err(describe)?;
     if bytes.len() as u64 > MAX_SOURCE_BYTES {
-        return Err(format!(
+        return Err(Unreadable::Other(format!(
             "larger than {} MiB, the limit for a .pack file",
             MAX_SOURCE_BYTES >> 20
-        ));
+        )));
     }
-    let text = String::from_utf8(bytes).map_err(|_| "not UTF-8 text".to_owned())?;
+    let text = String::from_utf8(bytes).map_err(|_| other("not UTF-8 text"))?;
     // A byte-order mark (some editors write one) is not part of the text.
     Ok(match text.strip_prefix('\u{feff}') {
         Some(rest) => rest.to_owned(),
@@ -51,7 +52,7 @@ pub fn read_source(path: &Path) -> Result<String, String> {
 pub struct FsLoader;
 
 impl Loader for FsLoader {
-    fn read(&self, path: &Path) -> Result<String, String> {
+    fn read(&self, path: &Path) -> Result<String, Unreadable> {
         read_source(path)
     }
 }
@@ -416,12 +417,13 @@ mod tests {
         );
         assert_eq!(
             read_source(&d).unwrap_err(),
-            "a directory, not a .pack file"
+            Unreadable::Other("a directory, not a .pack file".into())
         );
         fs::write(d.join("manifest.json"), "{}").expect("written");
         assert!(
             read_source(&d)
                 .unwrap_err()
+                .to_string()
                 .contains("a compiled directory")
         );
         let _ = fs::remove_dir_all(&d);

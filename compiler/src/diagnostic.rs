@@ -237,6 +237,39 @@ mod tests {
         assert_eq!(shown.chars().skip(at).collect::<String>(), line[298..]);
     }
 
+    /// A `use` of a file that is missing is told that paths are relative
+    /// to the using file; one that is there but unreadable (a helper's
+    /// `use "/dev/zero"`, larger than 16 MiB) is told what a usable file
+    /// is instead.
+    #[test]
+    fn a_use_of_an_unreadable_file_is_not_told_about_relative_paths() {
+        use crate::source::{Loader, Unreadable};
+        use std::path::Path;
+        struct Files;
+        impl Loader for Files {
+            fn read(&self, path: &Path) -> Result<String, Unreadable> {
+                match path.to_str() {
+                    Some("main.pack") => Ok("use \"big.pack\"\nuse \"gone.pack\"\n".into()),
+                    Some("big.pack") => Err(Unreadable::Other("larger than 16 MiB".into())),
+                    _ => Err(Unreadable::Missing),
+                }
+            }
+        }
+        let failed = check(&Files, &[PathBuf::from("main.pack")], &Anywhere)
+            .map(|_| ())
+            .expect_err("unreadable uses");
+        let helps: Vec<Option<String>> = failed.errors.iter().map(Error::help).collect();
+        assert_eq!(failed.errors.len(), 2, "{:?}", failed.errors);
+        assert!(
+            helps[0].as_deref().is_some_and(|h| h.contains("16 MiB")),
+            "{helps:?}"
+        );
+        assert!(
+            helps[1].as_deref().is_some_and(|h| h.contains("relative")),
+            "{helps:?}"
+        );
+    }
+
     /// Thousands of errors: the first [`SHOWN_ERRORS`] are rendered, and a
     /// line says how many more there are; every one is still counted.
     #[test]

@@ -2,7 +2,7 @@
 //! the places it speaks of, and knows its stable code, its caret label and
 //! its fix (`help`). Rendering lives in `diagnostic`.
 
-use crate::source::Loc;
+use crate::source::{Loc, Unreadable};
 use crate::workspace::{Pose, Task};
 use packwright_grammar::SyntaxError;
 use std::path::PathBuf;
@@ -27,14 +27,14 @@ const HIGH_TIP: f64 = 0.8;
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum Error {
     #[error("cannot read `{}`: {reason}", path.display())]
-    Read { path: PathBuf, reason: String },
+    Read { path: PathBuf, reason: Unreadable },
     #[error("{error}")]
     Syntax { at: Loc, error: SyntaxError },
     #[error("cannot read `{path}`: {reason}")]
     UseMissing {
         at: Loc,
         path: String,
-        reason: String,
+        reason: Unreadable,
     },
     #[error("`use` cycle: {chain}")]
     UseCycle { at: Loc, chain: String },
@@ -42,7 +42,7 @@ pub enum Error {
     RobotFileMissing {
         at: Loc,
         path: String,
-        reason: String,
+        reason: Unreadable,
     },
     /// A robot description that is read but cannot be used.
     #[error("`{path}`: {reason}")]
@@ -472,9 +472,23 @@ impl Error {
         Some(match self {
             Error::Read { .. } => "check the path and the file's permissions".into(),
             Error::Syntax { error, .. } => return error.help(),
-            Error::UseMissing { .. } => "`use` paths are relative to the file that uses them".into(),
+            Error::UseMissing {
+                reason: Unreadable::Missing,
+                ..
+            } => "`use` paths are relative to the file that uses them".into(),
+            Error::UseMissing {
+                reason: Unreadable::Other(_),
+                ..
+            } => "the file is there but cannot be used: make it a readable UTF-8 `.pack` file of at most 16 MiB".into(),
             Error::UseCycle { .. } => "remove one of the `use` lines; a file cannot use itself, even through others".into(),
-            Error::RobotFileMissing { .. } => "the path is relative to the file that names it".into(),
+            Error::RobotFileMissing {
+                reason: Unreadable::Missing,
+                ..
+            } => "the path is relative to the file that names it".into(),
+            Error::RobotFileMissing {
+                reason: Unreadable::Other(_),
+                ..
+            } => "the file is there but cannot be read: make it a readable UTF-8 URDF file".into(),
             Error::RobotUnusable { .. } => "packwright drives one chain of six revolute joints from the root link to `tool0` (or `flange`); side branches bolted on by fixed joints are fine, collision meshes must be STL or OBJ files it can find".into(),
             Error::Duplicate { kind, .. } => format!("rename one of the two; every {kind} needs its own name"),
             Error::Unknown { kind: "product", name, .. } if SEQUENCE_RULES.contains(&name.as_str()) => format!("a `demo` lists its products in the order they were packed (`sequence A, C, E`); `sequence {name}` belongs in a `demos` block"),

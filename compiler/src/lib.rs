@@ -30,7 +30,7 @@ pub mod workspace;
 pub use emit::{Written, file};
 pub use error::Error;
 pub use output::{Artifact, MemoryOutput, Output, OutputFile};
-pub use source::{FileId, Loader, Loc, MemoryLoader, SourceMap};
+pub use source::{FileId, Loader, Loc, MemoryLoader, SourceMap, Unreadable};
 pub use warning::{HELD_ROOM, Warning};
 pub use workspace::{Anywhere, Workspace};
 

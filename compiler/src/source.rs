@@ -8,8 +8,28 @@ use std::path::{Component, Path, PathBuf};
 
 /// Reads source files for the compiler.
 pub trait Loader {
-    /// The text of the file at `path`, or a short reason why not.
-    fn read(&self, path: &Path) -> Result<String, String>;
+    /// The text of the file at `path`, or why not.
+    fn read(&self, path: &Path) -> Result<String, Unreadable>;
+}
+
+/// Why a source file could not be read.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Unreadable {
+    /// There is no file at the path.
+    Missing,
+    /// There is something at the path that cannot be read as `.pack`
+    /// text: a directory, a file without permission, one too large or
+    /// not UTF-8 (the reason, for people).
+    Other(String),
+}
+
+impl std::fmt::Display for Unreadable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unreadable::Missing => f.write_str("no such file"),
+            Unreadable::Other(reason) => f.write_str(reason),
+        }
+    }
 }
 
 /// Files held in memory, by normalised path.
@@ -30,11 +50,11 @@ impl MemoryLoader {
 }
 
 impl Loader for MemoryLoader {
-    fn read(&self, path: &Path) -> Result<String, String> {
+    fn read(&self, path: &Path) -> Result<String, Unreadable> {
         self.files
             .get(&normalize(path))
             .cloned()
-            .ok_or_else(|| "no such file".to_owned())
+            .ok_or(Unreadable::Missing)
     }
 }
 
