@@ -294,6 +294,23 @@ fn exit_codes_and_json_lines() {
             "every diagnostic says how to fix it: {d}"
         );
     }
+    assert_eq!(summary["not_shown"], 0);
+
+    // compile --json: one line, typed like check's, so that a JSON Lines
+    // reader dispatches on `type` either way.
+    let json_out = dir.join("json_out");
+    let compiled = packwright(&[
+        "compile",
+        "--json",
+        "orders/suites/teach.pack",
+        "-o",
+        &json_out.display().to_string(),
+    ]);
+    assert_eq!(compiled.status.code(), Some(0));
+    let stdout = text(&compiled.stdout);
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    let report: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
+    assert_eq!(report["type"], "compiled", "{report}");
 }
 
 #[test]

@@ -43,6 +43,7 @@ pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
         outln!(
             "{}",
             serde_json::json!({
+                "type": "compiled",
                 "output": args.output.display().to_string(),
                 "files": files,
                 "demonstrations": compiled.expanded.demonstration_count(),
