@@ -47,9 +47,15 @@ pub struct LineIndex {
 }
 
 impl LineIndex {
+    /// Lines end at `\n`, `\r\n` or a lone `\r` (old Mac files: an
+    /// error in one was reported at 1:737, the whole file one line).
     pub fn new(text: &str) -> LineIndex {
+        let bytes = text.as_bytes();
         let mut line_starts = vec![0];
-        line_starts.extend(text.match_indices('\n').map(|(i, _)| i + 1));
+        line_starts.extend(bytes.iter().enumerate().filter_map(|(i, &b)| {
+            let lone_cr = b == b'\r' && bytes.get(i + 1) != Some(&b'\n');
+            (b == b'\n' || lone_cr).then_some(i + 1)
+        }));
         LineIndex { line_starts }
     }
 
@@ -80,6 +86,16 @@ impl LineIndex {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_lone_carriage_return_ends_a_line_as_a_line_feed_does() {
+        for text in ["ab\ncd\nef", "ab\r\ncd\r\nef", "ab\rcd\ref"] {
+            let idx = LineIndex::new(text);
+            let e = text.find('e').expect("e");
+            assert_eq!(idx.line_col(text, e), (3, 1), "{text:?}");
+            assert_eq!(idx.line_text(text, 2), "cd", "{text:?}");
+        }
+    }
 
     #[test]
     fn line_and_column() {
