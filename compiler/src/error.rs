@@ -538,7 +538,7 @@ impl Error {
             Error::RangesTooLarge { .. } => "lower one of the two upper bounds".into(),
             Error::JitterImpossible { .. } => "lower the jitter, space the products further apart, or enlarge the pending area".into(),
             Error::KeepsNothing { .. } => "raise `keep`".into(),
-            Error::TooManyConfigurations { .. } => "generate fewer: `choose` fewer products or slots, `keep` a smaller share of the combinations (counted after `keep`), a lower `repeat`, or (scenarios) a lower `count`".into(),
+            Error::TooManyConfigurations { limit, .. } => format!("generate fewer: `choose` fewer products or slots, `keep` a smaller share of the combinations (counted after `keep`), a lower `repeat`, or (scenarios) a lower `count`; all the blocks of one compilation together may generate at most {limit} too (E048)"),
             Error::TooManyInTotal { .. } => "generate fewer in this or an earlier block (`choose`, `keep`, `repeat`, `count`), or compile the blocks in separate runs".into(),
             Error::SequenceMismatch {
                 left_out,
