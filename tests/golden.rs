@@ -295,6 +295,17 @@ fn exit_codes_and_json_lines() {
         );
     }
     assert_eq!(summary["not_shown"], 0);
+    // The notes the text form shows are in the JSON too (a helper's
+    // probe: they were left out).
+    let twice = packwright(&[
+        "check",
+        "--json",
+        "tests/cases/err/product_listed_twice.pack",
+    ]);
+    let first: serde_json::Value =
+        serde_json::from_str(text(&twice.stdout).lines().next().unwrap_or("")).expect("JSON");
+    assert_eq!(first["notes"][0]["line"], 6, "{first}");
+    assert_eq!(first["notes"][0]["message"], "first listed here", "{first}");
 
     // compile --json: one line, typed like check's, so that a JSON Lines
     // reader dispatches on `type` either way.

@@ -153,6 +153,33 @@ pub struct JsonDiagnostic {
     pub column: Option<usize>,
     pub label: String,
     pub help: Option<String>,
+    /// The places the text form shows under `note:` (the first of two
+    /// duplicates, a product standing in the way).
+    pub notes: Vec<JsonNote>,
+}
+
+/// A note of a diagnostic: what is at another place.
+#[derive(Debug, Clone, Serialize)]
+pub struct JsonNote {
+    pub message: String,
+    pub file: String,
+    pub line: usize,
+    pub column: usize,
+}
+
+fn json_notes(sources: &SourceMap, notes: Vec<(Loc, String)>) -> Vec<JsonNote> {
+    notes
+        .into_iter()
+        .map(|(loc, message)| {
+            let (file, line, column) = sources.position(loc);
+            JsonNote {
+                message,
+                file,
+                line,
+                column,
+            }
+        })
+        .collect()
 }
 
 pub fn to_json(sources: &SourceMap, error: &Error) -> JsonDiagnostic {
@@ -175,6 +202,7 @@ pub fn to_json(sources: &SourceMap, error: &Error) -> JsonDiagnostic {
         column,
         label: error.label(),
         help: error.help(),
+        notes: json_notes(sources, error.notes()),
     }
 }
 
@@ -198,6 +226,7 @@ pub fn warning_to_json(sources: &SourceMap, warning: &Warning) -> JsonDiagnostic
         column: Some(column),
         label: warning.label(),
         help: Some(warning.help()),
+        notes: json_notes(sources, warning.notes()),
     }
 }
 
