@@ -248,6 +248,11 @@ pub struct Held {
 /// the padding ([`Checker::lifting`]).
 pub const LIFT_ROOM: f64 = 0.0005;
 
+/// How near (m) a standing product's footprint must come to a carried
+/// product's for [`Checker::above_neighbours`] to ask that the carried one
+/// hang above it.
+pub const ABOVE_NEIGHBOURS: f64 = 0.02;
+
 /// The least a lifted product's sides are padded ([`Checker::lifting`],
 /// m): a neighbour closer than this and [`LIFT_ROOM`] together leaves the
 /// product where it stands.
@@ -479,6 +484,27 @@ impl Checker {
             side_pad,
             ..held.leaving_support()
         }
+    }
+
+    /// Whether `held`, carried with the arm at `q`, hangs above every
+    /// standing product whose footprint comes within [`ABOVE_NEIGHBOURS`]
+    /// of its own (the held product's padded bottom over their tops): a
+    /// lift lowered until the product hangs beside a neighbour leaves the
+    /// carry that follows, which moves it sideways, to meet it.
+    pub fn above_neighbours(&self, q: &Joints, held: &Held) -> bool {
+        let at = self.held_pose(q, &held.carried());
+        let near = ABOVE_NEIGHBOURS as f32;
+        let (lo, hi) = (at.aabb.mins, at.aabb.maxs);
+        self.products
+            .iter()
+            .filter(|o| !o.is_product(Some(held.name.as_str())))
+            .filter(|o| {
+                o.aabb.maxs.x > lo.x - near
+                    && o.aabb.mins.x < hi.x + near
+                    && o.aabb.maxs.y > lo.y - near
+                    && o.aabb.mins.y < hi.y + near
+            })
+            .all(|o| o.top < f64::from(lo.z))
     }
 
     /// The distance from a standing product's box `at` to the nearest
@@ -1204,6 +1230,46 @@ mod tests {
         }]);
         let side = only_a.lifting(elsewhere, Some(&at)).side_pad;
         assert!((side - (0.0015 - LIFT_ROOM)).abs() < 1e-6, "{side}");
+    }
+
+    /// A product carried up from beside a taller neighbour 4 mm away hangs
+    /// above it only once its padded bottom is over the neighbour's top;
+    /// a taller product 10 cm away does not count.
+    #[test]
+    fn a_carried_product_hangs_above_its_neighbours_only_over_their_tops() {
+        use crate::execute::{Load, reach};
+        use nalgebra::Point3;
+        use std::f64::consts::FRAC_PI_2;
+        let arm = Arm::ur10();
+        let mut checker = Checker::new(&arm, &cell());
+        let product = |name: &str, x: f64, size: [f64; 3]| ProductBody {
+            name: name.into(),
+            centre: [x, -0.3, size[2] / 2.0],
+            size,
+            yaw: 0.0,
+        };
+        checker.set_products(&[
+            product("A", 0.6, [0.05, 0.05, 0.06]),
+            product("B", 0.654, [0.05, 0.05, 0.08]),
+            product("far", 0.75, [0.05, 0.05, 0.2]),
+        ]);
+        let held = Held::under_cup("A", [0.05, 0.05, 0.06], 0.1, Vector3::zeros());
+        let ready =
+            arm.from_ur_convention(&[0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0]);
+        let at = |tip_z: f64| {
+            reach(
+                &checker,
+                Point3::new(0.6, -0.3, tip_z),
+                0.0,
+                &ready,
+                Load::FREE,
+            )
+            .expect("a pose")
+        };
+        // Bottom 40 mm up, beside B's 80 mm: not above it.
+        assert!(!checker.above_neighbours(&at(0.10), &held));
+        // Bottom 90 mm up: over B's top by more than the padding.
+        assert!(checker.above_neighbours(&at(0.15), &held));
     }
 
     /// Over thousands of configurations, free and colliding, near the

@@ -189,7 +189,10 @@ impl Reachability {
     fn lift(&self, goal: &SubGoal, heights: &[f64], from: &[Joints], held: &Held) -> Vec<Joints> {
         let load = Load::holding(held);
         let carried = held.carried();
-        let clear = |q: &Joints| self.checker.check(q, Some(&carried), None).is_none();
+        let clear = |q: &Joints| {
+            self.checker.check(q, Some(&carried), None).is_none()
+                && self.checker.above_neighbours(q, held)
+        };
         let full = self.step(goal, &heights[..heights.len().min(1)], Some(from), load);
         if !full.is_empty() {
             return full;

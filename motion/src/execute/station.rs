@@ -453,12 +453,14 @@ impl<'a, W: World> Station<'a, W> {
         let solve = |z: f64| solve_by(z, false);
         // A lowered lift leaves the product where the next motion, which
         // carries it padded all round, starts free: not down among its
-        // neighbours.
+        // neighbours, nor hanging beside one (the carry moves it
+        // sideways).
         let clear_when_carried = |solved: &Solved| {
             load.held.is_none_or(|h| {
                 self.checker
                     .check(&solved.joints, Some(&h.carried()), load.ignore)
                     .is_none()
+                    && self.checker.above_neighbours(&solved.joints, h)
             })
         };
         solve(goal.tip[2])
