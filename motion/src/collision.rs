@@ -486,6 +486,14 @@ impl Checker {
         }
     }
 
+    /// Whether the carry of `held` (padded all round, no longer leaving
+    /// its support) may start with the arm at `q`: it is free there, but
+    /// the product `touch` names, and hangs above its neighbours
+    /// ([`Checker::above_neighbours`]). What a lowered lift must leave.
+    pub fn clear_to_carry(&self, q: &Joints, held: &Held, touch: Option<Touch>) -> bool {
+        self.check(q, Some(&held.carried()), touch).is_none() && self.above_neighbours(q, held)
+    }
+
     /// Whether `held`, carried with the arm at `q`, hangs above every
     /// standing product whose footprint comes within [`ABOVE_NEIGHBOURS`]
     /// of its own (the held product's padded bottom over their tops): a

@@ -14,7 +14,7 @@
 
 use super::station::{
     LIFT_VIAS, Load, MAX_CARRY_RAISES, MAX_RAISES, MIN_LIFT, READY, home_on, home_tip, lowerings,
-    raises, reach, solutions,
+    raises, reach, solutions, tip_line,
 };
 use crate::collision::{Checker, Held, ProductBody};
 use crate::expert::{self, SubGoal};
@@ -188,11 +188,7 @@ impl Reachability {
     /// tip's line from one of `from`.
     fn lift(&self, goal: &SubGoal, heights: &[f64], from: &[Joints], held: &Held) -> Vec<Joints> {
         let load = Load::holding(held);
-        let carried = held.carried();
-        let clear = |q: &Joints| {
-            self.checker.check(q, Some(&carried), None).is_none()
-                && self.checker.above_neighbours(q, held)
-        };
+        let clear = |q: &Joints| self.checker.clear_to_carry(q, held, None);
         let full = self.step(goal, &heights[..heights.len().min(1)], Some(from), load);
         if !full.is_empty() {
             return full;
@@ -220,33 +216,30 @@ impl Reachability {
     /// `to`, through [`LIFT_VIAS`] via points each joined straight to the
     /// one before, when every segment is free.
     fn up_the_line(&self, from: &Joints, to: [f64; 3], load: Load) -> Option<Joints> {
-        let a = self
+        let a: [f64; 3] = self
             .checker
             .arm()
-            .tool_tip(self.checker.base(), from, self.cell.suction);
-        let mut near = *from;
-        for i in 1..=LIFT_VIAS {
-            let t = i as f64 / LIFT_VIAS as f64;
-            let tip = Point3::new(
-                a[0] + (to[0] - a[0]) * t,
-                a[1] + (to[1] - a[1]) * t,
-                a[2] + (to[2] - a[2]) * t,
-            );
-            let q = reach(&self.checker, tip, 0.0, &near, load)?;
+            .tool_tip(self.checker.base(), from, self.cell.suction)
+            .into();
+        let mut points = tip_line(&self.checker, *from, a, to, LIFT_VIAS, 0.0, load)?;
+        let last = points.last().unwrap_or(from);
+        points.push(reach(&self.checker, Point3::from(to), 0.0, last, load)?);
+        let mut before = *from;
+        for q in &points {
             let free = q
                 .iter()
-                .zip(&near)
+                .zip(&before)
                 .all(|(a, b)| (a - b).abs() <= MAX_DESCENT_TURN)
                 && self
                     .checker
-                    .check_motion(&near, &q, load.held, load.ignore)
+                    .check_motion(&before, q, load.held, load.ignore)
                     .is_none();
             if !free {
                 return None;
             }
-            near = q;
+            before = *q;
         }
-        Some(near)
+        Some(before)
     }
 
     /// Placing it, picked at `at`, in slot `slot`: the first sub-goal no

@@ -92,10 +92,36 @@ pub(crate) struct Leg {
     pub speed: f64,
 }
 
-/// Where the last of `legs` leaves the arm.
 /// Via points of a lift up the cup tip's line ([`Station::up_the_line`]).
 pub(crate) const LIFT_VIAS: usize = 5;
 
+/// The free inverse-kinematics solutions of the cup tip's straight line
+/// from `a` to `b` at `n - 1` points evenly between (the ends left out),
+/// each nearest the one before, from `from`; `None` where a point has
+/// none.
+pub(crate) fn tip_line(
+    checker: &Checker,
+    from: Joints,
+    a: [f64; 3],
+    b: [f64; 3],
+    n: usize,
+    yaw: f64,
+    load: Load,
+) -> Option<Vec<Joints>> {
+    let mut near = from;
+    (1..n)
+        .map(|i| {
+            let t = i as f64 / n as f64;
+            let tip = Point3::from(std::array::from_fn::<f64, 3, _>(|j| {
+                a[j] + (b[j] - a[j]) * t
+            }));
+            near = reach(checker, tip, yaw, &near, load)?;
+            Some(near)
+        })
+        .collect()
+}
+
+/// Where the last of `legs` leaves the arm.
 pub(crate) fn leg_end(legs: &[Leg]) -> Option<Joints> {
     legs.last().and_then(|l| l.route.waypoints.last().copied())
 }
@@ -456,12 +482,8 @@ impl<'a, W: World> Station<'a, W> {
         // neighbours, nor hanging beside one (the carry moves it
         // sideways).
         let clear_when_carried = |solved: &Solved| {
-            load.held.is_none_or(|h| {
-                self.checker
-                    .check(&solved.joints, Some(&h.carried()), load.ignore)
-                    .is_none()
-                    && self.checker.above_neighbours(&solved.joints, h)
-            })
+            load.held
+                .is_none_or(|h| self.checker.clear_to_carry(&solved.joints, h, load.ignore))
         };
         solve(goal.tip[2])
             .or_else(|| {
@@ -531,30 +553,33 @@ impl<'a, W: World> Station<'a, W> {
         load: Load,
     ) -> Option<Route> {
         let (a, b) = (self.tip(&from), self.tip(&to));
-        let mut near = from;
-        let mut vias = Vec::with_capacity(LIFT_VIAS);
-        for i in 1..LIFT_VIAS {
-            let t = i as f64 / LIFT_VIAS as f64;
-            let tip = Point3::from(std::array::from_fn::<f64, 3, _>(|j| {
-                a[j] + (b[j] - a[j]) * t
-            }));
-            near = reach(&self.checker, tip, yaw, &near, load)?;
-            vias.push(near);
-        }
+        let mut vias = tip_line(&self.checker, from, a, b, LIFT_VIAS, yaw, load)?;
         vias.push(to);
-        // Only beside the neighbours does the line matter: the vias a
-        // straight joint motion skips are left out first (the blend
-        // stops short of each).
+        // Only beside the neighbours does the line matter.
+        self.through(k, from, vias, load)
+    }
+
+    /// The checked commands from `from` through `points`, the points a
+    /// straight joint motion skips left out first ([`fewer_vias`]: the
+    /// blend stops short of each via, and speeds up on longer legs), else
+    /// through every one.
+    pub fn through(
+        &self,
+        k: usize,
+        from: Joints,
+        points: Vec<Joints>,
+        load: Load,
+    ) -> Option<Route> {
         let free = |a: &Joints, b: &Joints| {
             self.checker
                 .check_motion(a, b, load.held, load.ignore)
                 .is_none()
         };
-        let fewer = fewer_vias(from, &vias, free);
-        (fewer.len() < vias.len())
+        let fewer = fewer_vias(from, &points, free);
+        (fewer.len() < points.len())
             .then(|| self.checked(k, from, &fewer, load).ok())
             .flatten()
-            .or_else(|| self.checked(k, from, &vias, load).ok())
+            .or_else(|| self.checked(k, from, &points, load).ok())
     }
 
     /// A picking stage's sub-goals (hover, contact, lift) solved from the

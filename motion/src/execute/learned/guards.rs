@@ -9,9 +9,9 @@
 //!   where the straight joint motion bows into a wall;
 //! - [`level_vias`]: across at the higher end's height, where a swing
 //!   out of or past a deep box comes down or rises over its rim;
-//! - ([`fewer_vias`](crate::execute::vias::fewer_vias), shared with the
-//!   expert's lift: through the policy's steps or a descent's vias, the
-//!   ones a straight joint motion skips left out;)
+//! - (the policy's steps or a descent's vias are routed by
+//!   `Station::through`, as the expert's lift up the line is: the ones a
+//!   straight joint motion skips left out, `fewer_vias`;)
 //! - [`held_at_limits`] and [`with_room`]: the base and wrist 3 near their
 //!   limits held there, or turned the other way round;
 //! - [`nearer_middle`]: nearly half a turn round, the base the way that

@@ -23,7 +23,6 @@ use super::station::{
     Connect, Leg, Load, MAX_CARRY_RAISES, MAX_RAISES, PlanningBudget, RAISE_STEP, READY, Route,
     SUCCESS_RADIUS, Station, Unchecked, judge, leg_end, raises,
 };
-use super::vias::fewer_vias;
 use super::{checked_samples, expected_next};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
@@ -240,21 +239,10 @@ impl<W: World> Learned<'_, W> {
                 // its end, then down the vertical, as the expert's descent
                 // and the back-up from a release go.
                 // The vias (or steps, below) a straight joint motion can
-                // skip are left out first: the blend speeds up on longer
-                // legs, and a descent through five vias stops short of
-                // each.
-                let free = |a: &Joints, b: &Joints| {
-                    s.checker
-                        .check_motion(a, b, load.held, load.ignore)
-                        .is_none()
-                };
-                let through = |points: Vec<Joints>| {
-                    let fewer = fewer_vias(start, &points, free);
-                    (fewer.len() < points.len())
-                        .then(|| route(fewer).ok())
-                        .flatten()
-                        .or_else(|| route(points).ok())
-                };
+                // skip are left out first (`Station::through`): the blend
+                // speeds up on longer legs, and a descent through five
+                // vias stops short of each.
+                let through = |points: Vec<Joints>| s.through(0, start, points, load);
                 let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
                 if let Some(vias) = descent_vias(arm, base, suction, start, end, tolerance, act)
                     && let Some(route) = through(vias)
@@ -371,8 +359,9 @@ impl<W: World> Learned<'_, W> {
     /// the sub-goal's budget lasts): first the lowest height whose steps'
     /// end joined straight is free (one check a height), then, where none
     /// is, the lowest that [`Learned::rollout`] reaches by any of its
-    /// ways, up to [`ALL_WAYS_RAISES`] steps up. Most heights under something standing in the way fail, and
-    /// each of the other ways is a motion of its own to blend and check
+    /// ways, up to [`ALL_WAYS_RAISES`] steps up. Most heights under
+    /// something standing in the way fail, and each of the other ways is
+    /// a motion of its own to blend and check
     /// (measured on a florist's cell with 250-280 mm vases: 8 to 12
     /// heights tried, 3 to 17 ms each).
     fn raised_over(
