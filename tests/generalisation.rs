@@ -352,6 +352,35 @@ fn a_deeper_box_and_taller_products_than_any_taught_are_packed_without_fallback(
     }
 }
 
+/// Boxes close to the robot's base (tests/cells/near_base.pack, after a
+/// helper's probe cells 7102 and 7111). A 300 mm deep tote beside the
+/// base: from the usual "ready" shape the arm started in, the upper arm
+/// met the tote's wall at every height on the way to it, and every
+/// scenario fell back (two or three times per package); the expert goes
+/// there in another shape. The policy's steps are now taken from the
+/// same pose in the arm's other shapes, the arm changing its shape on
+/// the way to the nearest end that is free.
+#[test]
+fn a_deep_tote_beside_the_base_is_reached_in_another_arm_shape() {
+    for scenario in ["beside_four/01", "beside_four/02"] {
+        file_packs_without_fallback("tests/cells/near_base.pack", scenario);
+    }
+}
+
+/// The same file's tray close behind the base: above the slot, the
+/// upper arm of the shape the arm carried the product in lay across the
+/// tray (a fallback in 8 of 10 scenarios). The arm now changes its shape
+/// on the way to the approach. In `behind_four/08` the next product's
+/// lift, in that shape, then folded the forearm into wrist 2, and the
+/// first free grip shape's hover was not reached from there (a fallback):
+/// the regrip now goes on to the next free shape.
+#[test]
+fn a_tray_close_behind_the_base_is_reached_in_another_arm_shape() {
+    for scenario in ["behind_four/01", "behind_four/08"] {
+        file_packs_without_fallback("tests/cells/near_base.pack", scenario);
+    }
+}
+
 /// A florist's box behind the robot (tests/cells/florist.pack): vases
 /// of 250 and 280 mm stand in the pending area beside flat packets. The
 /// learned hover over a packet, back from the box, swept the wrist past

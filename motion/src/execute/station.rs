@@ -601,12 +601,26 @@ impl<'a, W: World> Station<'a, W> {
         loads: [Load; 2],
         held: &dyn Fn(&Joints) -> Held,
     ) -> Option<[Solved; 3]> {
+        self.grips(goals, from, yaw, loads, held).next()
+    }
+
+    /// Every shape [`Station::grip`] finds free, nearest `from` first,
+    /// each solved when it is asked for: a caller that cannot reach one
+    /// shape's hover goes on to the next.
+    pub fn grips<'s>(
+        &'s self,
+        goals: &'s [SubGoal; 3],
+        from: &Joints,
+        yaw: f64,
+        loads: [Load<'s>; 2],
+        held: &'s dyn Fn(&Joints) -> Held,
+    ) -> impl Iterator<Item = [Solved; 3]> + 's {
         let [hover, contact, lift] = goals;
         let [free, guarded] = loads;
         let point = |g: &SubGoal| Point3::new(g.tip[0], g.tip[1], g.tip[2]);
         solutions(&self.checker, point(contact), yaw, from)
             .into_iter()
-            .filter(|q| {
+            .filter(move |q| {
                 self.arm.within_limits(q)
                     && self
                         .checker
@@ -614,7 +628,7 @@ impl<'a, W: World> Station<'a, W> {
                         .is_none()
             })
             .take_while(|_| !self.late())
-            .find_map(|at| {
+            .filter_map(move |at| {
                 let gripped = held(&at);
                 let up = self
                     .solve(lift, 3, &at, yaw, Load::holding(&gripped), lift.tip[2])

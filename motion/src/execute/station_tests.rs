@@ -561,3 +561,45 @@ fn a_carried_point_over_a_taller_product_is_raised_until_clear() {
         .expect("reached");
     assert!((station.tip(&solved.joints)[2] - 0.33).abs() < 1e-6);
 }
+
+/// `grips` gives every free grip shape, nearest the arm first, and
+/// `grip` is its first: a caller that cannot reach one shape's hover
+/// goes on to the next (the learned regrip after a change of shape).
+#[test]
+fn grips_offers_every_free_shape_nearest_first_and_grip_is_the_first() {
+    let arm = Arm::ur10();
+    let (task, start, mut world) = empty_bench_cell(&arm);
+    let station = Station::new(&mut world, &arm, &task);
+    let goals = crate::expert::picking([0.6, -0.2, 0.025], 0.05, 0.15);
+    let cube = Held::under_cup(
+        "cube",
+        [0.05; 3],
+        task.cell.suction,
+        nalgebra::Vector3::zeros(),
+    );
+    let lifted = station.checker.lifting(cube, None);
+    let held = |_: &Joints| lifted.clone();
+    let loads = [Load::FREE, Load::FREE.guarded(task.cell.descent)];
+    let shapes: Vec<[Solved; 3]> = station.grips(&goals, &start, 0.0, loads, &held).collect();
+    assert!(shapes.len() >= 2, "{} free shapes", shapes.len());
+    let first = station
+        .grip(&goals, &start, 0.0, loads, &held)
+        .expect("a free shape");
+    assert_eq!(first[1].joints, shapes[0][1].joints);
+    let contacts: Vec<Joints> = shapes.iter().map(|s| s[1].joints).collect();
+    for pair in contacts.windows(2) {
+        assert_ne!(pair[0], pair[1]);
+        assert!(joint_distance(&pair[0], &start) <= joint_distance(&pair[1], &start));
+    }
+    for [over, at, up] in &shapes {
+        for q in [over.joints, at.joints, up.joints] {
+            assert!(arm.within_limits(&q));
+        }
+        // The descent ends at the contact; the lift starts there.
+        assert_eq!(
+            at.straight.as_ref().map(|(from, _)| *from),
+            Some(over.joints)
+        );
+        assert_eq!(up.straight.as_ref().map(|(from, _)| *from), Some(at.joints));
+    }
+}

@@ -37,7 +37,7 @@ use packwright_interface::outcome::{
 };
 use packwright_interface::{Graph, OrderTask, Policy, SequenceRule, SubGoalQuery, World};
 use packwright_kinematics::body::wrist_around_tool;
-use packwright_kinematics::{Arm, Joints};
+use packwright_kinematics::{Arm, Joints, joint_distance};
 use std::f64::consts::TAU;
 use std::time::Instant;
 use steps::BACK_UP_REACHED;
@@ -118,6 +118,15 @@ struct StagePlan<'l> {
     /// Placing: where the cup tip may let go with the held product and
     /// the cup clear of the box's walls ([`Inside`]).
     inside: Option<Inside>,
+}
+
+/// Which arm shapes [`Learned::reshaped`] tries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Shapes {
+    /// The branch the policy was taught on, from an arm on another.
+    Taught,
+    /// Every branch but the arm's own.
+    Others,
 }
 
 /// The learned loop over the shared stepping primitives.
@@ -266,52 +275,101 @@ impl<W: World> Learned<'_, W> {
     }
 
     /// A stage's first motion from an arm on another inverse-kinematics
-    /// branch than the policy was taught on: the policy's steps from the
-    /// taught branch's joints for `start`'s flange pose, their end reached
-    /// from `start` by the straight joint motion or a swing
-    /// ([`Station::route`]), or `start` brought to those joints where it
-    /// stands and the steps followed from there. A regrip's contact shape
-    /// (the wrist flipped, or the elbow below, to grip beside a taller
-    /// product) leaves the arm on another branch, where the policy's steps
-    /// fold the forearm into wrist 2 over the box; the arm changes its
-    /// shape on the way, as it does to the expert's inverse-kinematics
-    /// solution. `None` on the taught branch (nothing is tried), a non-UR
-    /// arm, or where neither way is free.
-    fn reshaped(&self, start: Joints, goal: [f64; 3], tolerance: f64, load: Load) -> Option<Route> {
+    /// branch than the policy was taught on ([`Shapes::Taught`]), or a
+    /// motion that keeping the arm's shape cannot make free
+    /// ([`Shapes::Others`]): the policy's steps from the joints of another
+    /// branch for `start`'s flange pose, their end reached from `start` by
+    /// the straight joint motion or a swing ([`Station::route`]), or
+    /// `start` brought to those joints where it stands and the steps
+    /// followed from there. A regrip's contact shape (the wrist flipped,
+    /// or the elbow below, to grip beside a taller product) leaves the arm
+    /// on another branch, where the policy's steps fold the forearm into
+    /// wrist 2 over the box; a deep box near the base puts the upper arm
+    /// of the shape the arm started in over its wall. The arm changes its
+    /// shape on the way, as it does to the expert's nearest free
+    /// inverse-kinematics solution; with several shapes, the steps' end
+    /// nearest `start` first. `None` on a non-UR arm, on the taught branch
+    /// with [`Shapes::Taught`], or where no way is free.
+    fn reshaped(
+        &self,
+        start: Joints,
+        goal: [f64; 3],
+        tolerance: f64,
+        load: Load,
+        shapes: Shapes,
+    ) -> Option<Route> {
+        self.reshaped_then(start, goal, tolerance, load, shapes, &mut |_| Some(()))
+            .map(|(route, ())| route)
+    }
+
+    /// [`Learned::reshaped`], taking only a shape from whose end `then`
+    /// finds its way on: the route and what `then` found.
+    fn reshaped_then<T>(
+        &self,
+        start: Joints,
+        goal: [f64; 3],
+        tolerance: f64,
+        load: Load,
+        shapes: Shapes,
+        then: &mut dyn FnMut(&Route) -> Option<T>,
+    ) -> Option<(Route, T)> {
         let s = &self.station;
         let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
-        let taught = arm.ur_branch(base, &arm.from_ur_convention(&READY))?;
-        if arm.ur_branch(base, &start)? == taught {
-            return None;
-        }
+        let own = arm.ur_branch(base, &start)?;
         let flange = arm.flange_pose(base, &start);
-        let from = arm.ur_ik_branches(base, &flange, &start)[taught]?;
+        let branches = arm.ur_ik_branches(base, &flange, &start);
+        let tried: Vec<usize> = match shapes {
+            Shapes::Taught => {
+                let taught = arm.ur_branch(base, &arm.from_ur_convention(&READY))?;
+                if own == taught {
+                    return None;
+                }
+                vec![taught]
+            }
+            Shapes::Others => (0..branches.len()).filter(|&b| b != own).collect(),
+        };
         let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
-        let steps =
-            policy_steps_near(MORE_STEPS, arm, base, suction, from, goal, tolerance, act).ok()?;
-        let last = steps.last().copied().unwrap_or(from);
-        let end = arm.into_limits(&held_at_limits(arm, &from, last), &from)?;
-        let end = with_room(arm, &from, end);
-        // Wrist 1 either way round: turning it the shorter way can fold
-        // wrist 2 into the forearm as the wrist flips.
-        let turns = [0.0, -TAU, TAU].map(|t| {
-            let mut turned = [from, end];
-            turned.iter_mut().for_each(|q| q[3] += t);
-            turned
-        });
-        turns
+        let mut ends: Vec<(Joints, Joints)> = tried
             .into_iter()
-            .filter(|[from, end]| arm.within_limits(from) && arm.within_limits(end))
-            .find_map(|[from, end]| {
-                s.route(Connect::Straight, 0, start, end, load)
-                    .ok()
-                    .or_else(|| {
-                        let waypoints = vec![from, end];
-                        checked_samples(arm, &s.checker, start, &waypoints, load)
-                            .ok()
-                            .map(|samples| Route { waypoints, samples })
-                    })
+            .filter_map(|b| {
+                let from = (*branches.get(b)?)?;
+                let steps =
+                    policy_steps_near(MORE_STEPS, arm, base, suction, from, goal, tolerance, act)
+                        .ok()?;
+                let last = steps.last().copied().unwrap_or(from);
+                let end = arm.into_limits(&held_at_limits(arm, &from, last), &from)?;
+                let end = with_room(arm, &from, end);
+                // An end whose own pose collides is not routed to.
+                s.checker
+                    .check(&end, load.held, load.ignore)
+                    .is_none()
+                    .then_some((from, end))
             })
+            .collect();
+        ends.sort_by(|a, b| joint_distance(&a.1, &start).total_cmp(&joint_distance(&b.1, &start)));
+        ends.into_iter().find_map(|(from, end)| {
+            // Wrist 1 either way round: turning it the shorter way can
+            // fold wrist 2 into the forearm as the wrist flips.
+            let turns = [0.0, -TAU, TAU].map(|t| {
+                let mut turned = [from, end];
+                turned.iter_mut().for_each(|q| q[3] += t);
+                turned
+            });
+            turns
+                .into_iter()
+                .filter(|[from, end]| arm.within_limits(from) && arm.within_limits(end))
+                .find_map(|[from, end]| {
+                    s.route(Connect::Straight, 0, start, end, load)
+                        .ok()
+                        .or_else(|| {
+                            let waypoints = vec![from, end];
+                            checked_samples(arm, &s.checker, start, &waypoints, load)
+                                .ok()
+                                .map(|samples| Route { waypoints, samples })
+                        })
+                })
+                .and_then(|route| then(&route).map(|found| (route, found)))
+        })
     }
 
     /// The policy's motion to a release `kept` inside the box's walls
@@ -579,6 +637,9 @@ impl<W: World> Learned<'_, W> {
                     (goal[0] - e[0]).hypot(goal[1] - e[1])
                 })
                 .filter(|d| *d > SUCCESS_RADIUS);
+            // A placing stage's approach planned again in another arm
+            // shape (below), replacing the one planned.
+            let mut approach_again: Option<Route> = None;
             let rolled = (!fallen && off.is_none()).then(|| {
                 let tolerance = tolerance(plan.stage, k);
                 let mut first_action_us = None;
@@ -596,7 +657,7 @@ impl<W: World> Learned<'_, W> {
                 // changes its shape on the way.
                 if k == 0
                     && rolled.is_err()
-                    && let Some(route) = self.reshaped(start, goal, tolerance, load)
+                    && let Some(route) = self.reshaped(start, goal, tolerance, load, Shapes::Taught)
                 {
                     rolled = Ok(route);
                 }
@@ -620,6 +681,45 @@ impl<W: World> Learned<'_, W> {
                     && let Some(end) = route.waypoints.last()
                 {
                     goals[k][2] = goal[2].max(self.station.tip(end)[2]);
+                    rolled = Ok(route);
+                }
+                // Above the slot, where the arm must change its shape (a
+                // box close behind the base: the upper arm of the arm's
+                // shape across it): changed on the way to the approach
+                // instead, a long swing already, when the policy's steps
+                // from there reach above the slot free (the arm's elbow
+                // flipped between the two took up to 1.3 s more).
+                if plan.stage == Stage::Placing
+                    && k == 1
+                    && matches!(rolled, Err(Shortfall::Collides { .. }))
+                    && !self.station.late()
+                    && let Some((approach, route)) = self.reshaped_then(
+                        from,
+                        goals[0],
+                        steps::tolerance(plan.stage, 0),
+                        load,
+                        Shapes::Others,
+                        &mut |approach| {
+                            let end = *approach.waypoints.last()?;
+                            let mut unused = None;
+                            self.rollout(end, goal, tolerance, load, &mut unused, Ways::All)
+                                .ok()
+                        },
+                    )
+                {
+                    approach_again = Some(approach);
+                    rolled = Ok(route);
+                }
+                // One that no height makes free (a deep box near the base,
+                // or behind it: the upper arm of the arm's shape over the
+                // box's wall, at every height the arm reaches): the arm
+                // changes its shape on the way, as the expert's does.
+                if switch == Suction::Keep
+                    && raisable
+                    && matches!(rolled, Err(Shortfall::Collides { .. }))
+                    && !self.station.late()
+                    && let Some(route) = self.reshaped(start, goal, tolerance, load, Shapes::Others)
+                {
                     rolled = Ok(route);
                 }
                 // A release whose motion collides is raised only as far
@@ -776,7 +876,21 @@ impl<W: World> Learned<'_, W> {
                 release_collides(switch, r) || matches!(r, Err(Shortfall::OverWall { .. }))
             });
             let route = match rolled {
-                Some(Ok(route)) => route,
+                Some(Ok(route)) => {
+                    // The approach, in the shape the motion above the
+                    // slot kept (the leg before this one).
+                    if let Some(approach) = approach_again
+                        && let Some(end) = approach.waypoints.last().copied()
+                        && let Some(leg) = legs.last_mut()
+                    {
+                        *leg = Leg::new(approach, Suction::Keep, load);
+                        tips[0] = self.station.tip(&end);
+                        if let Some(reached) = self.station.subgoals.last_mut() {
+                            *reached = tips[0];
+                        }
+                    }
+                    route
+                }
                 other => 'fell: {
                     let why = match (fallen, off, other) {
                         (false, Some(distance_m), _) => Some(Shortfall::OffTarget { distance_m }),

@@ -145,23 +145,26 @@ impl<W: World> Learned<'_, W> {
         let free = plan.load;
         let guarded = free.guarded(s.task.cell.descent);
         let held = |at: &Joints| self.gripped_at(at, plan, size, top);
-        let [over, at, up] = s.grip(goals, &from, 0.0, [free, guarded], &held)?;
-        let gripped = held(&at.joints);
-        let carrying = Load::holding(&gripped);
-        let over = over.joints;
-        let to = s.route(how, 1, from, over, free).ok().or_else(|| {
-            let mut waypoints = hover?.waypoints.clone();
-            waypoints.push(over);
-            checked_samples(s.arm, &s.checker, from, &waypoints, free)
-                .ok()
-                .map(|samples| Route { waypoints, samples })
-        })?;
-        let (at, down) = s.route_solved(how, 2, over, at, 0.0, guarded).ok()?;
-        let (raised, up) = s.route_solved(how, 3, at, up, 0.0, carrying).ok()?;
-        Some([
-            (Leg::new(to, over_switch, free), over),
-            (Leg::new(down, contact_switch, guarded), at),
-            (Leg::new(up, lift_switch, carrying), raised),
-        ])
+        // The first free shape whose hover is reached from `from`.
+        s.grips(goals, &from, 0.0, [free, guarded], &held)
+            .find_map(|[over, at, up]| {
+                let gripped = held(&at.joints);
+                let carrying = Load::holding(&gripped);
+                let over = over.joints;
+                let to = s.route(how, 1, from, over, free).ok().or_else(|| {
+                    let mut waypoints = hover?.waypoints.clone();
+                    waypoints.push(over);
+                    checked_samples(s.arm, &s.checker, from, &waypoints, free)
+                        .ok()
+                        .map(|samples| Route { waypoints, samples })
+                })?;
+                let (at, down) = s.route_solved(how, 2, over, at, 0.0, guarded).ok()?;
+                let (raised, up) = s.route_solved(how, 3, at, up, 0.0, carrying).ok()?;
+                Some([
+                    (Leg::new(to, over_switch, free), over),
+                    (Leg::new(down, contact_switch, guarded), at),
+                    (Leg::new(up, lift_switch, carrying), raised),
+                ])
+            })
     }
 }
