@@ -2,6 +2,7 @@
 //! one text. Each carries the span to point at; `code`, `label` and `help`
 //! give the rest of a rendered diagnostic.
 
+use crate::place::Place;
 use crate::span::Span;
 use thiserror::Error;
 
@@ -14,10 +15,15 @@ pub enum SyntaxError {
         /// Readable alternatives ("a length such as `50 mm`", "`->`").
         expected: String,
         found: String,
-        /// Where the parser was: "at the top level", "in a cell".
-        context: &'static str,
+        /// Where the parser was: at the top level, in a cell.
+        context: Place,
         /// A keyword close to what was written.
         suggestion: Option<String>,
+        /// The first word of the statement the error stands in (`slot`),
+        /// whose form the help shows.
+        statement: Option<String>,
+        /// What was found is an invisible character ([`crate::is_invisible`]).
+        invisible: bool,
     },
     #[error("unknown unit `{unit}`")]
     UnknownUnit {
@@ -128,7 +134,15 @@ impl SyntaxError {
                 "the file ends in the middle of a statement or block; close every `{` with `}`"
                     .into(),
             ),
-            SyntaxError::Unexpected { .. } => None,
+            SyntaxError::Unexpected {
+                invisible: true, ..
+            } => Some(
+                "delete it: an invisible character, often pasted in with the text, is part of no statement"
+                    .into(),
+            ),
+            SyntaxError::Unexpected {
+                context, statement, ..
+            } => Some(context.help(statement.as_deref())),
             SyntaxError::UnknownUnit { allowed, .. } => Some(format!("write one of {allowed}")),
             SyntaxError::MissingUnit { number, .. } => Some(format!(
                 "a bare number is metres; write `{number} mm` or `{number} cm`, or `{number} m` if you really mean metres"

@@ -2,6 +2,7 @@
 
 use crate::ast::*;
 use crate::error::{MAX_BARE_METRES, MAX_SYNTAX_ERRORS, SyntaxError};
+use crate::place::{Place, statement_word};
 use crate::span::Span;
 use crate::suggest::closest;
 use pest::Parser;
@@ -21,7 +22,7 @@ pub fn parse(src: &str) -> Result<File, Vec<SyntaxError>> {
             None => File { items: Vec::new() },
         },
         Err(e) => {
-            b.errors.push(from_pest(src, e, 0, "at the top level"));
+            b.errors.push(from_pest(src, e, 0, Place::TopLevel));
             File { items: Vec::new() }
         }
     };
@@ -166,12 +167,7 @@ fn scientific(src: &str, at: Span) -> Option<(Span, String, String)> {
         .then(|| (span, written, format!("{value}")))
 }
 
-fn from_pest(
-    src: &str,
-    e: pest::error::Error<Rule>,
-    offset: usize,
-    context: &'static str,
-) -> SyntaxError {
+fn from_pest(src: &str, e: pest::error::Error<Rule>, offset: usize, context: Place) -> SyntaxError {
     let pos = offset
         + match e.location {
             pest::error::InputLocation::Pos(p) => p,
@@ -220,6 +216,11 @@ fn from_pest(
         found,
         context,
         suggestion,
+        statement: statement_word(src, pos).map(str::to_owned),
+        invisible: src
+            .get(pos..)
+            .and_then(|rest| rest.chars().next())
+            .is_some_and(crate::visible::is_invisible),
     }
 }
 
@@ -306,18 +307,7 @@ impl Builder {
         let start = p.as_span().start();
         // Where the parser was, by the item's first word: a product line
         // missing its shape is "in a product", not "at the top level".
-        let context = match text.split_whitespace().next() {
-            Some("use") => "in a `use`",
-            Some("cell") => "in a cell",
-            Some("product") => "in a product",
-            Some("inventory") => "in an inventory",
-            Some("order") => "in an order",
-            Some("demo") => "in a demo",
-            Some("demos") => "in a `demos` block",
-            Some("scenario") => "in a scenario",
-            Some("scenarios") => "in a `scenarios` block",
-            _ => "at the top level",
-        };
+        let context = Place::of_item(text.split_whitespace().next());
         let unclosed = text.matches('{').count() > text.matches('}').count();
         match PackParser::parse(Rule::item_only, text) {
             Err(e) => {
@@ -342,7 +332,7 @@ impl Builder {
 
     /// Re-parses a recovered fragment with the rule expected there, to say
     /// precisely what is wrong with it.
-    fn reparse(&mut self, src: &str, rule: Rule, p: &P, context: &'static str) {
+    fn reparse(&mut self, src: &str, rule: Rule, p: &P, context: Place) {
         let start = p.as_span().start();
         match PackParser::parse(rule, p.as_str()) {
             Err(e) => self.errors.push(from_pest(src, e, start, context)),
@@ -355,6 +345,8 @@ impl Builder {
                     found,
                     context,
                     suggestion: None,
+                    statement: statement_word(src, start).map(str::to_owned),
+                    invisible: false,
                 });
             }
         }
@@ -367,7 +359,7 @@ impl Builder {
         src: &str,
         p: P<'i>,
         only: Rule,
-        context: &'static str,
+        context: Place,
     ) -> (Name, Option<Name>, Vec<P<'i>>) {
         let mut names = Vec::new();
         let mut stmts = Vec::new();
@@ -403,7 +395,7 @@ impl Builder {
 
     fn cell(&mut self, src: &str, p: P) -> Item {
         let s = span(&p);
-        let (name_, _, raw) = self.block(src, p, Rule::cell_stmt_only, "in a cell");
+        let (name_, _, raw) = self.block(src, p, Rule::cell_stmt_only, Place::Cell);
         let mut stmts = Vec::new();
         for st in raw {
             let ss = span(&st);
@@ -513,7 +505,7 @@ impl Builder {
 
     fn inventory(&mut self, src: &str, p: P) -> Item {
         let s = span(&p);
-        let (name_, cell, raw) = self.block(src, p, Rule::inventory_stmt_only, "in an inventory");
+        let (name_, cell, raw) = self.block(src, p, Rule::inventory_stmt_only, Place::Inventory);
         let mut entries = Vec::new();
         for st in raw {
             let ss = span(&st);
@@ -540,7 +532,7 @@ impl Builder {
 
     fn order(&mut self, src: &str, p: P) -> Item {
         let s = span(&p);
-        let (name_, inv, raw) = self.block(src, p, Rule::order_stmt_only, "in an order");
+        let (name_, inv, raw) = self.block(src, p, Rule::order_stmt_only, Place::Order);
         let mut stmts = Vec::new();
         for st in raw {
             let ss = span(&st);
@@ -567,7 +559,7 @@ impl Builder {
 
     fn demo(&mut self, src: &str, p: P) -> Item {
         let s = span(&p);
-        let (name_, order, raw) = self.block(src, p, Rule::demo_stmt_only, "in a demo");
+        let (name_, order, raw) = self.block(src, p, Rule::demo_stmt_only, Place::Demo);
         let mut stmts = Vec::new();
         for st in raw {
             let ss = span(&st);
@@ -592,7 +584,7 @@ impl Builder {
 
     fn demos(&mut self, src: &str, p: P) -> Item {
         let s = span(&p);
-        let (name_, inv, raw) = self.block(src, p, Rule::demos_stmt_only, "in a demos block");
+        let (name_, inv, raw) = self.block(src, p, Rule::demos_stmt_only, Place::Demos);
         let mut stmts = Vec::new();
         for st in raw {
             let ss = span(&st);
@@ -620,7 +612,7 @@ impl Builder {
 
     fn scenario(&mut self, src: &str, p: P) -> Item {
         let s = span(&p);
-        let (name_, order, raw) = self.block(src, p, Rule::scenario_stmt_only, "in a scenario");
+        let (name_, order, raw) = self.block(src, p, Rule::scenario_stmt_only, Place::Scenario);
         let mut stmts = Vec::new();
         for st in raw {
             let ss = span(&st);
@@ -648,8 +640,7 @@ impl Builder {
 
     fn scenarios(&mut self, src: &str, p: P) -> Item {
         let s = span(&p);
-        let (name_, inv, raw) =
-            self.block(src, p, Rule::scenarios_stmt_only, "in a scenarios block");
+        let (name_, inv, raw) = self.block(src, p, Rule::scenarios_stmt_only, Place::Scenarios);
         let mut stmts = Vec::new();
         for st in raw {
             let ss = span(&st);
