@@ -7,6 +7,7 @@ use packwright_compiler::{Artifact, Loader, Output, OutputFile, Unreadable};
 use std::fs;
 use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
 
 /// The largest `.pack` source file read, bytes (16 MiB): a bigger one (or
 /// an endless one such as `/dev/zero`) is refused after reading this much.
@@ -55,6 +56,48 @@ impl Loader for FsLoader {
     fn read(&self, path: &Path) -> Result<String, Unreadable> {
         read_source(path)
     }
+}
+
+/// The temporary siblings this process is writing: removed when the run
+/// is interrupted ([`remove_temporaries_on_interrupt`]), as a failed
+/// run's are when its writer is dropped.
+static BEING_WRITTEN: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn being_written() -> MutexGuard<'static, Vec<PathBuf>> {
+    BEING_WRITTEN.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn writing(tmp: &Path) {
+    being_written().push(tmp.to_owned());
+}
+
+fn written(tmp: &Path) {
+    being_written().retain(|p| p != tmp);
+}
+
+/// On Ctrl-C (SIGINT): the temporary siblings being written are removed,
+/// and the run exits 130, as a shell reports an interrupted command.
+/// Earlier output is untouched (it is replaced only by a finished
+/// write's rename); a run killed outright leaves its siblings to the next
+/// run ([`remove_stale_siblings`]).
+pub fn remove_temporaries_on_interrupt() {
+    // Without a handler (one already set) Ctrl-C keeps its default.
+    let _ = ctrlc::set_handler(|| {
+        for tmp in being_written().iter() {
+            // The writer may still be adding files: tried again.
+            for _ in 0..3 {
+                let gone = if tmp.is_dir() {
+                    fs::remove_dir_all(tmp)
+                } else {
+                    fs::remove_file(tmp)
+                };
+                if gone.is_ok() || !tmp.exists() {
+                    break;
+                }
+            }
+        }
+        std::process::exit(130);
+    });
 }
 
 /// Removes temporary siblings of `path` (`.NAME.tmp-PID`, `.NAME.old-PID`)
@@ -202,12 +245,15 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     }
     remove_stale_siblings(path);
     let tmp = sibling(path, "tmp");
-    write_synced(&tmp, bytes)?;
-    fs::rename(&tmp, path)
-        .with_context(|| format!("cannot replace {}", path.display()))
-        .inspect_err(|_| {
-            let _ = fs::remove_file(&tmp);
-        })
+    writing(&tmp);
+    let replaced = write_synced(&tmp, bytes).and_then(|()| {
+        fs::rename(&tmp, path).with_context(|| format!("cannot replace {}", path.display()))
+    });
+    if replaced.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    written(&tmp);
+    replaced
 }
 
 /// True if `dir` may be replaced: it holds nothing, or earlier output
@@ -252,6 +298,7 @@ impl AtomicDir {
         let tmp = sibling(dir, "tmp");
         let _ = fs::remove_dir_all(&tmp);
         fs::create_dir(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+        writing(&tmp);
         Ok(AtomicDir {
             dir: dir.to_owned(),
             tmp,
@@ -266,6 +313,9 @@ impl AtomicDir {
 
     /// Swaps the written directory into place.
     pub fn commit(mut self) -> anyhow::Result<()> {
+        // From here a Ctrl-C leaves the sibling to the next run, which
+        // puts an old directory moved aside back.
+        written(&self.tmp);
         let dir = &self.dir;
         if dir.exists() {
             let old = sibling(dir, "old");
@@ -292,6 +342,7 @@ impl Drop for AtomicDir {
         if !self.committed {
             let _ = fs::remove_dir_all(&self.tmp);
         }
+        written(&self.tmp);
     }
 }
 

@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    packwright::fsio::remove_temporaries_on_interrupt();
     let json = cli.wants_json();
     match packwright::run(cli) {
         Ok(code) => code.into(),
