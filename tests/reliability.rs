@@ -210,6 +210,27 @@ fn assert_old_or_new(
     }
 }
 
+/// A scratch directory `name` holding a copy of the line2 cell.
+fn beside_line2(name: &str) -> common::Scratch {
+    let dir = scratch("reliability", name);
+    fs::copy(
+        common::root().join("orders/cells/line2.pack"),
+        dir.join("line2.pack"),
+    )
+    .expect("copied");
+    dir
+}
+
+/// A file beside line2 (`beside_line2`) whose `demos` block makes 600
+/// demonstrations per `repeat`.
+fn many_demonstrations(repeat: u32, seed: u32) -> String {
+    format!(
+        "use \"line2.pack\"\ndemos many for pantry5 {{\n  \
+         choose 3 of jam, tea, honey, soap, candle into k1, k2, k3, k4, k5\n  \
+         jitter 20 mm\n  repeat {repeat}\n  seed {seed}\n}}\n"
+    )
+}
+
 /// `compile` killed at fixed points over its run (about 12,000
 /// demonstrations of the line2 cell): `out` is always the old output or the new one
 /// whole, never a mix; the next run leaves no debris.
@@ -218,19 +239,8 @@ fn a_killed_compile_leaves_the_old_output_or_the_new_one() {
     if !Path::new("/proc/self").exists() {
         return;
     }
-    let dir = scratch("reliability", "killed-compile");
-    fs::copy(
-        common::root().join("orders/cells/line2.pack"),
-        dir.join("line2.pack"),
-    )
-    .expect("copied");
-    let source = |seed: u32| {
-        format!(
-            "use \"line2.pack\"\ndemos many for pantry5 {{\n  \
-             choose 3 of jam, tea, honey, soap, candle into k1, k2, k3, k4, k5\n  \
-             jitter 20 mm\n  repeat 20\n  seed {seed}\n}}\n"
-        )
-    };
+    let dir = beside_line2("killed-compile");
+    let source = |seed: u32| many_demonstrations(20, seed);
     let (old_file, new_file) = (dir.join("old.pack"), dir.join("new.pack"));
     fs::write(&old_file, source(1)).expect("written");
     fs::write(&new_file, source(2)).expect("written");
@@ -275,19 +285,8 @@ fn an_interrupted_compile_removes_what_it_was_writing_and_keeps_the_old_output()
     if !Path::new("/proc/self").exists() {
         return;
     }
-    let dir = scratch("reliability", "interrupted-compile");
-    fs::copy(
-        common::root().join("orders/cells/line2.pack"),
-        dir.join("line2.pack"),
-    )
-    .expect("copied");
-    let source = |repeat: u32| {
-        format!(
-            "use \"line2.pack\"\ndemos many for pantry5 {{\n  \
-             choose 3 of jam, tea, honey, soap, candle into k1, k2, k3, k4, k5\n  \
-             jitter 20 mm\n  repeat {repeat}\n  seed 1\n}}\n"
-        )
-    };
+    let dir = beside_line2("interrupted-compile");
+    let source = |repeat: u32| many_demonstrations(repeat, 1);
     let (old_file, new_file) = (dir.join("old.pack"), dir.join("new.pack"));
     fs::write(&old_file, source(1)).expect("written");
     fs::write(&new_file, source(100)).expect("written");
