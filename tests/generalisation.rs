@@ -381,6 +381,27 @@ fn a_tray_close_behind_the_base_is_reached_in_another_arm_shape() {
     }
 }
 
+/// Products waiting close to the base, the box behind it
+/// (tests/cells/near_pending.pack, a helper's probe cell): after the last
+/// release of `n2_8010/01` and `n1_8010/07` every way up the policy's
+/// steps or inverse kinematics took folded the forearm into wrist 2, and
+/// the package was reported incomplete with the product in its slot. The
+/// back-up now goes as RRT-Connect's does there (a fallback, sub-goal 4
+/// of placing).
+#[test]
+fn a_back_up_with_no_learned_way_up_falls_back_instead_of_failing() {
+    for scenario in ["n2_8010/01", "n1_8010/07"] {
+        let report = executes_file("tests/cells/near_pending.pack", scenario);
+        assert_eq!(report["complete"], true, "{report}");
+        let backed_up = report["fallbacks"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .any(|f| f["stage"] == "placing" && f["subgoal"] == 4);
+        assert!(backed_up, "{report}");
+    }
+}
+
 /// A florist's box behind the robot (tests/cells/florist.pack): vases
 /// of 250 and 280 mm stand in the pending area beside flat packets. The
 /// learned hover over a packet, back from the box, swept the wrist past

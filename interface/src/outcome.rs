@@ -379,7 +379,8 @@ pub struct Fallback {
     /// The product handled.
     pub product: String,
     pub stage: Stage,
-    /// The stage's sub-goal (1, 2, 3) whose rollout fell short.
+    /// The stage's sub-goal (1, 2, 3) whose rollout fell short; 4 for the
+    /// back-up from a release (placing).
     pub subgoal: usize,
     pub why: Shortfall,
     /// The first sub-goal (1, 2, 3) for which RRT-Connect went to the

@@ -120,6 +120,10 @@ struct StagePlan<'l> {
     inside: Option<Inside>,
 }
 
+/// The back-up from a release, counted as the placing stage's fourth
+/// sub-goal when it falls back ([`Fallback::subgoal`]).
+const BACK_UP_SUBGOAL: usize = 4;
+
 /// Which arm shapes [`Learned::reshaped`] tries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Shapes {
@@ -1151,10 +1155,39 @@ impl<W: World> Learned<'_, W> {
             Err(first) => {
                 let heights =
                     || raises(above[2], MAX_CARRY_RAISES).take_while(|_| !self.station.late());
-                heights()
+                let learned = heights()
                     .find_map(|z| self.way_up(start, z, load, Ways::Straight).ok())
-                    .or_else(|| heights().find_map(|z| self.way_up(start, z, load, Ways::All).ok()))
-                    .ok_or(first)?
+                    .or_else(|| {
+                        heights().find_map(|z| self.way_up(start, z, load, Ways::All).ok())
+                    });
+                match learned {
+                    Some(route) => route,
+                    // No way up from where the product was let go (the
+                    // forearm folded into wrist 2 on every way up, close to
+                    // the base): the product is in its slot, so the
+                    // back-up goes as RRT-Connect's does, to the solution
+                    // above the release (a fallback, not a failure).
+                    None => {
+                        let route = self
+                            .backed_up(start, above[2], load)
+                            .ok_or_else(|| first.clone())?;
+                        let why = match first {
+                            Failure::WouldCollide { hit, .. } => Shortfall::Collides { hit },
+                            _ => Shortfall::Short {
+                                steps: 0,
+                                distance_m: (above[2] - self.station.tip(&start)[2]).abs(),
+                            },
+                        };
+                        self.fallbacks.push(Fallback {
+                            product: name.to_owned(),
+                            stage: Stage::Placing,
+                            subgoal: BACK_UP_SUBGOAL,
+                            why,
+                            expert_from: None,
+                        });
+                        route
+                    }
+                }
             }
         };
         // Timed as a sub-goal, as the other planners' back-up is.
@@ -1163,6 +1196,23 @@ impl<W: World> Learned<'_, W> {
             .timing
             .subgoal(SubGoalKind::BackUp, elapsed * 1e6);
         Ok(Leg::new(route, Suction::Keep, load))
+    }
+
+    /// RRT-Connect's way from `start`, where the cup let go, to straight
+    /// above it at height `z` (the inverse-kinematics solution nearest the
+    /// start, raised as the expert's back-up is where that is blocked).
+    fn backed_up(&self, start: Joints, z: f64, load: Load) -> Option<Route> {
+        let s = &self.station;
+        let [x, y, _] = s.tip(&start);
+        let up = SubGoal {
+            tip: [x, y, z],
+            suction: Suction::Keep,
+        };
+        let solved = s.solve(&up, 1, &start, 0.0, load, z).ok()?;
+        let how = Connect::Rrt { seed: self.seed };
+        s.route_solved(how, 1, start, solved, 0.0, load)
+            .ok()
+            .map(|(_, route)| route)
     }
 
     /// The reasoner's decision, timed.
