@@ -32,10 +32,10 @@ use guards::{
 };
 use nalgebra::Vector3;
 use packwright_interface::outcome::{
-    Failure, Fallback, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage, SubGoalKind,
-    Violation,
+    Failure, Fallback, Hit, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage,
+    SubGoalKind, Violation,
 };
-use packwright_interface::{Graph, OrderTask, Policy, SequenceRule, SubGoalQuery, World};
+use packwright_interface::{Body, Graph, OrderTask, Policy, SequenceRule, SubGoalQuery, World};
 use packwright_kinematics::body::wrist_around_tool;
 use packwright_kinematics::{Arm, Joints, joint_distance};
 use std::f64::consts::TAU;
@@ -123,6 +123,19 @@ struct StagePlan<'l> {
 /// The back-up from a release, counted as the placing stage's fourth
 /// sub-goal when it falls back ([`Fallback::subgoal`]).
 const BACK_UP_SUBGOAL: usize = 4;
+
+/// Whether `rolled` collides with an arm link against a box.
+fn arm_against_box(rolled: &Result<Route, Shortfall>) -> bool {
+    matches!(
+        rolled,
+        Err(Shortfall::Collides {
+            hit: Hit::Bodies {
+                a: Body::Link(_),
+                b: Body::Box(_)
+            }
+        })
+    )
+}
 
 /// Which arm shapes [`Learned::reshaped`] tries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -374,6 +387,32 @@ impl<W: World> Learned<'_, W> {
                 })
                 .and_then(|route| then(&route).map(|found| (route, found)))
         })
+    }
+
+    /// The approach from `from` planned again in another arm shape
+    /// ([`Learned::reshaped_then`]), from whose end the policy's motion
+    /// reaches `above` (above the slot) free: both routes.
+    fn approach_reshaped(
+        &self,
+        from: Joints,
+        approach: [f64; 3],
+        above: [f64; 3],
+        tolerance: f64,
+        load: Load,
+    ) -> Option<(Route, Route)> {
+        self.reshaped_then(
+            from,
+            approach,
+            steps::tolerance(Stage::Placing, 0),
+            load,
+            Shapes::Others,
+            &mut |route| {
+                let end = *route.waypoints.last()?;
+                let mut unused = None;
+                self.rollout(end, above, tolerance, load, &mut unused, Ways::All)
+                    .ok()
+            },
+        )
     }
 
     /// The policy's motion to a release `kept` inside the box's walls
@@ -677,6 +716,20 @@ impl<W: World> Learned<'_, W> {
                 // with another arm shape instead, which the policy's
                 // steps, keeping the start's shape, cannot reach.
                 let raisable = plan.stage == Stage::Placing || k == 0;
+                // Above the slot, an arm link against a box (the upper
+                // arm over the wall of a box near the base) is a matter of
+                // the arm's shape, not of height: the shape is changed
+                // (below) before every height is tried (1.2 s on a box
+                // 300 mm deep behind the base).
+                let approach_first = (plan.stage == Stage::Placing
+                    && k == 1
+                    && arm_against_box(&rolled)
+                    && !self.station.late())
+                .then(|| self.approach_reshaped(from, goals[0], goal, tolerance, load));
+                if let Some(Some((approach, route))) = &approach_first {
+                    approach_again = Some(approach.clone());
+                    rolled = Ok(route.clone());
+                }
                 if switch == Suction::Keep
                     && raisable
                     && matches!(rolled, Err(Shortfall::Collides { .. }))
@@ -692,24 +745,15 @@ impl<W: World> Learned<'_, W> {
                 // shape across it): changed on the way to the approach
                 // instead, a long swing already, when the policy's steps
                 // from there reach above the slot free (the arm's elbow
-                // flipped between the two took up to 1.3 s more).
-                if plan.stage == Stage::Placing
+                // flipped between the two took up to 1.3 s more). Tried
+                // before the heights where an arm link meets the box (above).
+                if approach_first.is_none()
+                    && plan.stage == Stage::Placing
                     && k == 1
                     && matches!(rolled, Err(Shortfall::Collides { .. }))
                     && !self.station.late()
-                    && let Some((approach, route)) = self.reshaped_then(
-                        from,
-                        goals[0],
-                        steps::tolerance(plan.stage, 0),
-                        load,
-                        Shapes::Others,
-                        &mut |approach| {
-                            let end = *approach.waypoints.last()?;
-                            let mut unused = None;
-                            self.rollout(end, goal, tolerance, load, &mut unused, Ways::All)
-                                .ok()
-                        },
-                    )
+                    && let Some((approach, route)) =
+                        self.approach_reshaped(from, goals[0], goal, tolerance, load)
                 {
                     approach_again = Some(approach);
                     rolled = Ok(route);
