@@ -402,6 +402,31 @@ fn a_back_up_with_no_learned_way_up_falls_back_instead_of_failing() {
     }
 }
 
+/// A product let go off its slot and handled again (tests/cells/
+/// tall_narrow.pack, a helper's probe cell: a tall narrow product fell
+/// off its slot and was picked again from inside the box) kept only its
+/// last attempt's row: its first turn was missing from the table and
+/// the rows added up to 5.63 s of a 9.78 s run. It now keeps its first
+/// turn, and its times are the sums of both: the rows add up to the
+/// package's time.
+#[test]
+fn a_product_handled_twice_keeps_its_first_turn_and_both_attempts_times() {
+    let out = packwright(&[
+        "execute",
+        "tests/cells/tall_narrow.pack",
+        "--scenario",
+        "n2_8015/04",
+        "--json",
+    ]);
+    let report = json(&out);
+    let rows = report["products"].as_array().expect("rows");
+    let sum: f64 = rows.iter().filter_map(|r| r["execution_s"].as_f64()).sum();
+    let total = report["time_s"].as_f64().expect("time_s");
+    assert!((sum - total).abs() < 1e-6, "{sum} of {total}\n{report}");
+    let turns: Vec<u64> = rows.iter().filter_map(|r| r["turn"].as_u64()).collect();
+    assert!(turns.contains(&1), "{report}");
+}
+
 /// A florist's box behind the robot (tests/cells/florist.pack): vases
 /// of 250 and 280 mm stand in the pending area beside flat packets. The
 /// learned hover over a packet, back from the box, swept the wrist past

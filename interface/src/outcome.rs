@@ -527,7 +527,9 @@ pub struct ProductReport {
     pub error_m: Option<f64>,
     /// Its turn: 1 for the first product the robot handled in this run,
     /// 2 for the next, ... (the rows are in the order's assignment order,
-    /// not the order packed); `None` when the robot did not handle it.
+    /// not the order packed); `None` when the robot did not handle it. A
+    /// product handled twice keeps its first turn, and its planning,
+    /// execution and bound are the sums over both.
     pub turn: Option<usize>,
     #[serde(flatten)]
     pub outcome: Outcome,

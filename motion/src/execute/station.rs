@@ -973,12 +973,15 @@ impl<'a, W: World> Station<'a, W> {
 
     /// Fills in `row` (product `p` for slot `s`) after the robot handled
     /// it: the planning and motion time since [`restart_clock`] and the
-    /// product's distance from its goal now.
+    /// product's distance from its goal now. A product handled again (let
+    /// go off its slot, then picked from where it fell) keeps its first
+    /// turn, and its times are the sum of both: the rows add up to the
+    /// package's time.
     ///
     /// [`restart_clock`]: Station::restart_clock
     pub fn measure(&mut self, row: &mut ProductReport, p: usize, s: usize) {
         self.handled += 1;
-        row.turn = Some(self.handled);
+        row.turn.get_or_insert(self.handled);
         let period = self.world.control_period();
         let after = self.world.observe();
         row.error_m = self.error_of(&after, p, s);
@@ -989,9 +992,9 @@ impl<'a, W: World> Station<'a, W> {
             bound_s,
             ..
         } = self.restart_clock();
-        row.planning_s = planning_s;
-        row.execution_s = steps as f64 * period;
-        row.bound_s = bound_s;
+        row.planning_s += planning_s;
+        row.execution_s += steps as f64 * period;
+        row.bound_s += bound_s;
     }
 
     /// How far product `p` is from its goal in slot `s` now.
