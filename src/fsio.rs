@@ -86,11 +86,7 @@ pub fn remove_temporaries_on_interrupt() {
         for tmp in being_written().iter() {
             // The writer may still be adding files: tried again.
             for _ in 0..3 {
-                let gone = if tmp.is_dir() {
-                    fs::remove_dir_all(tmp)
-                } else {
-                    fs::remove_file(tmp)
-                };
+                let gone = remove(tmp);
                 if gone.is_ok() || !tmp.exists() {
                     break;
                 }
@@ -98,6 +94,15 @@ pub fn remove_temporaries_on_interrupt() {
         }
         std::process::exit(130);
     });
+}
+
+/// Removes `path`, a directory with everything in it or a file.
+fn remove(path: &Path) -> std::io::Result<()> {
+    if path.is_dir() {
+        fs::remove_dir_all(path)
+    } else {
+        fs::remove_file(path)
+    }
 }
 
 /// Removes temporary siblings of `path` (`.NAME.tmp-PID`, `.NAME.old-PID`)
@@ -128,12 +133,7 @@ fn remove_stale_siblings(path: &Path) {
             && pid != std::process::id()
             && !Path::new(&format!("/proc/{pid}")).exists()
         {
-            let stale = entry.path();
-            let _ = if stale.is_dir() {
-                fs::remove_dir_all(&stale)
-            } else {
-                fs::remove_file(&stale)
-            };
+            let _ = remove(&entry.path());
         }
     }
 }

@@ -226,18 +226,10 @@ impl Place {
 
 impl fmt::Display for Place {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Place::TopLevel => "at the top level",
-            Place::Use => "in a `use`",
-            Place::Cell => "in a cell",
-            Place::Product => "in a product",
-            Place::Inventory => "in an inventory",
-            Place::Order => "in an order",
-            Place::Demo => "in a demo",
-            Place::Demos => "in a `demos` block",
-            Place::Scenario => "in a scenario",
-            Place::Scenarios => "in a `scenarios` block",
-        })
+        match self {
+            Place::TopLevel => f.write_str("at the top level"),
+            place => write!(f, "in {}", place.noun()),
+        }
     }
 }
 

@@ -548,18 +548,7 @@ impl<W: World> Learned<'_, W> {
         ceiling: f64,
     ) -> Result<(Route, bool), Failure> {
         let s = &self.station;
-        let rrt = |goal: &SubGoal, ceiling: f64| {
-            let solved = s.solve(goal, k + 1, &start, 0.0, load, ceiling)?;
-            s.route_solved(
-                Connect::Rrt { seed: self.seed },
-                k + 1,
-                start,
-                solved,
-                0.0,
-                load,
-            )
-            .map(|(_, route)| route)
-        };
+        let rrt = |goal: &SubGoal, ceiling: f64| self.rrt_to(goal, k + 1, start, load, ceiling);
         let experts = || {
             let ceiling = match k {
                 0 => expert[0].tip[2],
@@ -721,14 +710,16 @@ impl<W: World> Learned<'_, W> {
                 // the arm's shape, not of height: the shape is changed
                 // (below) before every height is tried (1.2 s on a box
                 // 300 mm deep behind the base).
-                let approach_first = (plan.stage == Stage::Placing
+                let shape_first = plan.stage == Stage::Placing
                     && k == 1
                     && arm_against_box(&rolled)
-                    && !self.station.late())
-                .then(|| self.approach_reshaped(from, goals[0], goal, tolerance, load));
-                if let Some(Some((approach, route))) = &approach_first {
-                    approach_again = Some(approach.clone());
-                    rolled = Ok(route.clone());
+                    && !self.station.late();
+                if shape_first
+                    && let Some((approach, route)) =
+                        self.approach_reshaped(from, goals[0], goal, tolerance, load)
+                {
+                    approach_again = Some(approach);
+                    rolled = Ok(route);
                 }
                 if switch == Suction::Keep
                     && raisable
@@ -747,7 +738,7 @@ impl<W: World> Learned<'_, W> {
                 // from there reach above the slot free (the arm's elbow
                 // flipped between the two took up to 1.3 s more). Tried
                 // before the heights where an arm link meets the box (above).
-                if approach_first.is_none()
+                if !shape_first
                     && plan.stage == Stage::Placing
                     && k == 1
                     && matches!(rolled, Err(Shortfall::Collides { .. }))
@@ -1242,21 +1233,32 @@ impl<W: World> Learned<'_, W> {
         Ok(Leg::new(route, Suction::Keep, load))
     }
 
-    /// RRT-Connect's way from `start`, where the cup let go, to straight
-    /// above it at height `z` (the inverse-kinematics solution nearest the
-    /// start, raised as the expert's back-up is where that is blocked).
-    fn backed_up(&self, start: Joints, z: f64, load: Load) -> Option<Route> {
+    /// RRT-Connect's way from `start` to `goal` (sub-goal `subgoal`),
+    /// solved as the expert solves it, raised no higher than `ceiling`.
+    fn rrt_to(
+        &self,
+        goal: &SubGoal,
+        subgoal: usize,
+        start: Joints,
+        load: Load,
+        ceiling: f64,
+    ) -> Result<Route, Failure> {
         let s = &self.station;
-        let [x, y, _] = s.tip(&start);
+        let solved = s.solve(goal, subgoal, &start, 0.0, load, ceiling)?;
+        let how = Connect::Rrt { seed: self.seed };
+        s.route_solved(how, subgoal, start, solved, 0.0, load)
+            .map(|(_, route)| route)
+    }
+
+    /// RRT-Connect's way from `start`, where the cup let go, to straight
+    /// above it at height `z` ([`Learned::rrt_to`]).
+    fn backed_up(&self, start: Joints, z: f64, load: Load) -> Option<Route> {
+        let [x, y, _] = self.station.tip(&start);
         let up = SubGoal {
             tip: [x, y, z],
             suction: Suction::Keep,
         };
-        let solved = s.solve(&up, 1, &start, 0.0, load, z).ok()?;
-        let how = Connect::Rrt { seed: self.seed };
-        s.route_solved(how, 1, start, solved, 0.0, load)
-            .ok()
-            .map(|(_, route)| route)
+        self.rrt_to(&up, 1, start, load, z).ok()
     }
 
     /// The reasoner's decision, timed.
