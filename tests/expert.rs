@@ -190,3 +190,79 @@ fn a_searched_path_whose_commands_collide_is_searched_for_again() {
         String::from_utf8_lossy(&out.stdout)
     );
 }
+
+/// The expert and RRT-Connect pack in the order the file's demonstrations
+/// teach, as the learned planner's reasoner does: in a cell taught
+/// descending they handled the products in inventory order before, so
+/// the planners were compared on different sequences (a helper's probe
+/// cell, c8030).
+#[test]
+fn the_baselines_pack_in_the_demonstrated_order() {
+    let text = r#"cell line {
+  robot ur10
+  base (0, 0, 0)
+  suction 100 mm
+  pending (0.45, -0.35) to (0.85, 0.35)
+  box tray (-0.1, 0.7) size (0.36, 0.2, 0.06)
+  slot a (-0.2, 0.7)
+  slot b (-0.1, 0.7)
+  slot c (0.0, 0.7)
+}
+product soap cube 50 mm
+product tea cube 50 mm
+product nuts cube 50 mm
+inventory shelf for line {
+  soap (0.6, -0.2)
+  tea (0.6, 0.0)
+  nuts (0.6, 0.2)
+}
+demos taught for shelf {
+  choose 2 of soap, tea, nuts into a, b, c
+  jitter 5 mm
+  sequence descending
+  seed 3
+}
+order three for shelf {
+  soap -> a
+  tea -> b
+  nuts -> c
+}
+"#;
+    let dir = scratch("expert", "sequence");
+    let pack = dir.join("line.pack");
+    fs::write(&pack, text).expect("write the cell");
+    let pack = pack.to_str().expect("utf-8");
+    for planner in ["expert", "rrt"] {
+        let out = packwright(&[
+            "execute",
+            pack,
+            "--order",
+            "three",
+            "--planner",
+            planner,
+            "--json",
+        ]);
+        assert!(
+            out.status.success(),
+            "{planner}: exit {:?}\n{}",
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout)
+        );
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("a JSON report");
+        let turns: Vec<(String, u64)> = report["products"]
+            .as_array()
+            .expect("product rows")
+            .iter()
+            .map(|r| {
+                (
+                    r["product"].as_str().unwrap_or_default().to_owned(),
+                    r["turn"].as_u64().unwrap_or_default(),
+                )
+            })
+            .collect();
+        // Rows stay in the order's assignment order; the turns say the
+        // products were handled last to first.
+        let expected = [("soap", 3), ("tea", 2), ("nuts", 1)].map(|(p, t)| (p.to_owned(), t));
+        assert_eq!(turns, expected, "{planner}");
+    }
+}

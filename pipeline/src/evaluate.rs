@@ -9,7 +9,7 @@ use packwright_compiler::expand::Setup;
 use packwright_interface::outcome::{
     FallbackKind, Outcome, PlannerKind, Report, SubGoalKind, Timing,
 };
-use packwright_interface::{Policy, World};
+use packwright_interface::{Policy, SequenceRule, World};
 use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
 use serde::Serialize;
@@ -65,14 +65,18 @@ pub struct CaseResult {
 }
 
 /// Runs scenario `name` (`setup`) with each of `planners`; the learned
-/// planner needs `nets`. With `reasoner_only`, only the reasoner's
-/// decisions are replayed.
+/// planner needs `nets`, and the expert and RRT-Connect handle the
+/// products in `sequence`'s order (the learned planner's, so that the
+/// three pack the same sequence). With `reasoner_only`, only the
+/// reasoner's decisions are replayed.
+#[allow(clippy::too_many_arguments)]
 pub fn run_case(
     name: &str,
     compiled: &Compiled,
     setup: &Setup,
     nets: Option<&Networks>,
     planners: &[PlannerKind],
+    sequence: &SequenceRule,
     seed: u64,
     reasoner_only: bool,
 ) -> Result<CaseResult> {
@@ -94,7 +98,7 @@ pub fn run_case(
             continue;
         };
         let mut sim = ep.simulator(start)?;
-        let report = execute::run(&mut sim, &ep.arm, &ep.task, &planner);
+        let report = execute::run_in_order(&mut sim, &ep.arm, &ep.task, &planner, sequence);
         result.runs.push((kind, Run::of(&report)));
     }
     Ok(result)

@@ -107,6 +107,21 @@ pub fn follow_cell_rule(nets: &mut Networks, compiled: &Compiled, cell: &str) ->
     }
 }
 
+/// The order the expert and RRT-Connect handle `cell`'s products in: the
+/// learned planner's when one runs beside them (`nets`, after
+/// [`follow_cell_rule`]), so that the planners pack the same sequence;
+/// else the one rule the compilation's demonstrations of the cell show;
+/// else inventory order.
+pub fn baseline_rule(nets: Option<&Networks>, compiled: &Compiled, cell: &str) -> SequenceRule {
+    match nets {
+        Some(n) => n.task.sequence.clone(),
+        None => crate::teach::cell_rule(compiled, cell)
+            .ok()
+            .flatten()
+            .map_or(SequenceRule::Ascending, |inferred| inferred.rule),
+    }
+}
+
 /// Whether `nets` was taught demonstrations in `cell`.
 pub fn taught(nets: &Networks, cell: &str) -> bool {
     nets.task.cells.iter().any(|c| c == cell)

@@ -17,7 +17,7 @@ use crate::episode::Episode;
 use crate::error::{PipelineError, Result};
 use nalgebra::{Isometry3, Point3, Vector3};
 use packwright_interface::world::{Contact, Observation, World, WorldError};
-use packwright_interface::{Joints, Report, Seen};
+use packwright_interface::{Joints, Report, Seen, SequenceRule};
 use packwright_motion::execute::{self, Planner};
 use packwright_ur::codec::ControllerVersion;
 use packwright_ur::products::{JsonFeed, Known, Nominal, ProductSource, ToolTip};
@@ -101,9 +101,15 @@ pub struct DryRun {
 
 /// Reads the robot's joints without taking control, plans the whole
 /// episode in the simulator from them, and checks the first command
-/// against the measured joints. Nothing moves. Errors: the robot cannot be
+/// against the measured joints. Nothing moves; the expert and RRT-Connect
+/// handle the products in `rule`'s order. Errors: the robot cannot be
 /// reached, or is not ready (a protective stop, not running).
-pub fn dry_run(ep: &Episode, address: &RobotAddress, planner: &Planner) -> Result<DryRun> {
+pub fn dry_run(
+    ep: &Episode,
+    address: &RobotAddress,
+    planner: &Planner,
+    rule: &SequenceRule,
+) -> Result<DryRun> {
     let (controller, state) = packwright_ur::read_state(address)?;
     if let Err(f @ (Fault::Safety(_) | Fault::Robot(_))) = check_state(&state) {
         return Err(UrError::NotReady(f).into());
@@ -113,7 +119,7 @@ pub fn dry_run(ep: &Episode, address: &RobotAddress, planner: &Planner) -> Resul
         inner: sim,
         commands: Vec::new(),
     };
-    let report = execute::run(&mut recording, &ep.arm, &ep.task, planner);
+    let report = execute::run_in_order(&mut recording, &ep.arm, &ep.task, planner, rule);
     let s = settings(ep, address);
     let check = CommandCheck {
         limits: s.limits,

@@ -9,12 +9,14 @@ use anyhow::bail;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use packwright_compiler::Compiled;
 use packwright_compiler::expand::Setup;
-use packwright_interface::{PlannerKind, Policy};
+use packwright_interface::{PlannerKind, Policy, SequenceRule};
 use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
 use packwright_pipeline::episode::{cell_of, episode};
 use packwright_pipeline::evaluate::{CaseResult, Row, Run, markdown, run_case};
-use packwright_pipeline::models::{CellRule, choose_planner, follow_cell_rule, taught};
+use packwright_pipeline::models::{
+    CellRule, baseline_rule, choose_planner, follow_cell_rule, taught,
+};
 use packwright_pipeline::reach::RobotWorkspace;
 use packwright_recording::{Journal, JournalPolicy, JournalWorld};
 use rayon::prelude::*;
@@ -116,6 +118,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
                 }
             }
         }
+        let sequence = baseline_rule(nets.as_ref(), &compiled, &cell);
         let mut planners = Vec::new();
         if nets.is_some() {
             planners.push(PlannerKind::Learned);
@@ -157,6 +160,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
                             &case.setup,
                             nets.as_ref(),
                             &planners,
+                            &sequence,
                             seed,
                         ),
                         None => run_case(
@@ -165,6 +169,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
                             &case.setup,
                             nets.as_ref(),
                             &planners,
+                            &sequence,
                             seed,
                             args.reasoner_only,
                         )
@@ -274,6 +279,7 @@ fn recording_path(dir: &Path, case: &str) -> PathBuf {
 /// trial there, then each planner from the start pose), every run
 /// journalled, and the file `path` written with one recording per
 /// planner.
+#[allow(clippy::too_many_arguments)]
 fn recorded_case(
     path: &Path,
     name: &str,
@@ -281,9 +287,10 @@ fn recorded_case(
     setup: &Setup,
     nets: Option<&Networks>,
     planners: &[PlannerKind],
+    sequence: &SequenceRule,
     seed: u64,
 ) -> anyhow::Result<CaseResult> {
-    let mut result = run_case(name, compiled, setup, nets, &[], seed, false)?;
+    let mut result = run_case(name, compiled, setup, nets, &[], sequence, seed, false)?;
     let ep = episode(&compiled.model, setup)?;
     let start = ep.home()?;
     let mut journalled = Vec::new();
@@ -296,7 +303,7 @@ fn recorded_case(
         };
         let mut sim = ep.simulator(start)?;
         let mut world = JournalWorld::new(&mut sim, &journal);
-        let report = execute::run(&mut world, &ep.arm, &ep.task, &planner);
+        let report = execute::run_in_order(&mut world, &ep.arm, &ep.task, &planner, sequence);
         result.runs.push((kind, Run::of(&report)));
         journalled.push((format!("{name} ({kind})"), journal.take(), report));
     }

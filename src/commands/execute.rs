@@ -12,7 +12,9 @@ use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
 use packwright_nets::features::{node_rows, slot_rows};
 use packwright_pipeline::episode::{Episode, episode, find_setup};
-use packwright_pipeline::models::{CellRule, choose_planner, follow_cell_rule, taught};
+use packwright_pipeline::models::{
+    CellRule, baseline_rule, choose_planner, follow_cell_rule, taught,
+};
 use packwright_pipeline::reach::RobotWorkspace;
 use packwright_pipeline::robot::{self, Products};
 use packwright_recording::{Journal, JournalPolicy, JournalWorld, Run, Scores};
@@ -113,6 +115,10 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
         (None, PlannerKind::Rrt) => Planner::Rrt { seed: args.seed },
         (None, _) => Planner::Expert,
     };
+    // The expert and RRT-Connect pack in the order the file's
+    // demonstrations of the cell teach (the learned planner's reasoner
+    // follows its own rule).
+    let sequence = baseline_rule(model.as_ref(), &compiled, &ep.task.cell.name);
     if let Some(address) = address {
         if args.svg.is_some() {
             anyhow::bail!("--svg draws simulated runs only (no --robot)");
@@ -120,15 +126,16 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
         if args.record.is_some() {
             anyhow::bail!("--record records simulated runs only (no --robot)");
         }
-        return on_robot(args, &address, &name, &ep, &planner);
+        return on_robot(args, &address, &name, &ep, (&planner, &sequence));
     }
     let mut sim = ep.simulator(ep.home()?)?;
     // The journal records what `--svg` draws and `--record` writes.
-    let report = execute::run(
+    let report = execute::run_in_order(
         &mut JournalWorld::new(&mut sim, &journal),
         &ep.arm,
         &ep.task,
         &planner,
+        &sequence,
     );
     let entries = journal.take();
     if let Some(path) = &args.svg {
@@ -194,10 +201,10 @@ fn on_robot(
     address: &RobotAddress,
     name: &str,
     ep: &Episode,
-    planner: &Planner,
+    (planner, sequence): (&Planner, &SequenceRule),
 ) -> anyhow::Result<Exit> {
     if args.dry_run {
-        let d = robot::dry_run(ep, address, planner)?;
+        let d = robot::dry_run(ep, address, planner, sequence)?;
         let verdict = match &d.first {
             Some((_, Ok(()))) => "ok".to_string(),
             Some((_, Err(problem))) => problem.to_string(),
@@ -248,7 +255,7 @@ fn on_robot(
         world.controller(),
         1.0 / world.control_period()
     );
-    let report = execute::run(&mut world, &ep.arm, &ep.task, planner);
+    let report = execute::run_in_order(&mut world, &ep.arm, &ep.task, planner, sequence);
     let fault = world.close();
     let exit = print_outcome(args, name, &report, "on the robot")?;
     if let Some(f) = fault {

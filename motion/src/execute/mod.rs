@@ -37,7 +37,7 @@ pub use station::{
 
 use packwright_interface::outcome::{PlannerKind, Report};
 use packwright_interface::record::MotionLog;
-use packwright_interface::{OrderTask, Policy, World};
+use packwright_interface::{OrderTask, Policy, SequenceRule, World};
 use packwright_kinematics::Arm;
 
 /// How to pack.
@@ -92,9 +92,42 @@ pub fn run_within<W: World>(
     planner: &Planner,
     budget: PlanningBudget,
 ) -> Report {
+    run_planned(world, arm, task, planner, budget, None)
+}
+
+/// [`run`] with the expert and RRT-Connect handling the products in
+/// `rule`'s order, the order the learned planner's reasoner is taught and
+/// judged by (with the same rule, the planners pack the same sequence and
+/// their times compare), rather than the assignment's. The learned
+/// planner's reasoner chooses by its own rule either way.
+pub fn run_in_order<W: World>(
+    world: &mut W,
+    arm: &Arm,
+    task: &OrderTask,
+    planner: &Planner,
+    rule: &SequenceRule,
+) -> Report {
+    run_planned(
+        world,
+        arm,
+        task,
+        planner,
+        PlanningBudget::default(),
+        Some(rule),
+    )
+}
+
+fn run_planned<W: World>(
+    world: &mut W,
+    arm: &Arm,
+    task: &OrderTask,
+    planner: &Planner,
+    budget: PlanningBudget,
+    rule: Option<&SequenceRule>,
+) -> Report {
     let straight = station::Connect::Straight;
     match *planner {
-        Planner::Expert => scripted::run(world, arm, task, straight, None, budget),
+        Planner::Expert => scripted::run(world, arm, task, straight, None, budget, rule),
         Planner::Rrt { seed } => scripted::run(
             world,
             arm,
@@ -102,6 +135,7 @@ pub fn run_within<W: World>(
             station::Connect::Rrt { seed },
             None,
             budget,
+            rule,
         ),
         Planner::Learned { policy, seed } => learned::run(world, arm, task, policy, seed, budget),
     }
@@ -123,5 +157,6 @@ pub fn run_recorded<W: World>(
         station::Connect::Straight,
         Some(log),
         budget,
+        None,
     )
 }

@@ -1,5 +1,5 @@
-//! The expert's and RRT-Connect's loop: the next product by the
-//! demonstrated sequence rule (inventory order), the expert's three
+//! The expert's and RRT-Connect's loop: the next product in the order
+//! given (the assignment's, or a sequence rule's chain), the expert's three
 //! sub-goals per stage, the inverse-kinematics branch nearest the current
 //! joints among the free ones, joined straight or by RRT-Connect (the
 //! expert searches too where every straight way collides); the
@@ -13,7 +13,7 @@ use crate::expert::{self, SubGoal, Suction};
 use nalgebra::Vector3;
 use packwright_interface::outcome::{Failure, Outcome, PlannerKind, Report, Stage, SubGoalKind};
 use packwright_interface::record::{self, ActionSample, MotionLog, SubGoalSample};
-use packwright_interface::{OrderTask, World};
+use packwright_interface::{OrderTask, SequenceRule, World};
 use packwright_kinematics::{Arm, Joints};
 use std::time::Instant;
 
@@ -351,6 +351,28 @@ fn gripping_blocked(why: &Failure) -> bool {
     )
 }
 
+/// The assignment's indices in the order the products are handled: the
+/// assignment's own (a demonstration's sequence), or `rule`'s chain (the
+/// order the reasoner is judged by), a product the rule does not name
+/// after those it does, in the assignment's order.
+fn turns(task: &OrderTask, rule: Option<&SequenceRule>) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..task.assignment.len()).collect();
+    if let Some(rule) = rule {
+        let names: Vec<&str> = task.products.iter().map(|p| p.name.as_str()).collect();
+        let chain = rule.chain(&names);
+        order.sort_by_key(|&i| {
+            chain
+                .iter()
+                .position(|&p| p == task.assignment[i].0)
+                .unwrap_or(usize::MAX)
+        });
+    }
+    order
+}
+
+/// Packs `task`, handling its products in the assignment's order or, with
+/// `rule`, in the rule's; the report's rows are in the assignment's order
+/// either way.
 pub(super) fn run<W: World>(
     world: &mut W,
     arm: &Arm,
@@ -358,6 +380,7 @@ pub(super) fn run<W: World>(
     connect: Connect,
     log: Option<&mut MotionLog>,
     budget: PlanningBudget,
+    rule: Option<&SequenceRule>,
 ) -> Report {
     let planner = match connect {
         Connect::Straight => PlannerKind::Expert,
@@ -370,13 +393,18 @@ pub(super) fn run<W: World>(
         connect,
         log,
     };
-    let mut products = Vec::new();
+    let mut products: Vec<_> = task
+        .assignment
+        .iter()
+        .map(|&(p, s)| runner.station.row(p, s))
+        .collect();
     let mut stopped = false;
     let mut collisions = Vec::new();
-    for &(p, s) in &task.assignment {
+    for i in turns(task, rule) {
+        let (p, s) = task.assignment[i];
         let decided = Instant::now();
         let goal = task.goal(p, s);
-        let mut report = runner.station.row(p, s);
+        let report = &mut products[i];
         let obs = runner.station.world.observe();
         match obs.find(&report.product) {
             None => report.outcome = Outcome::Waiting,
@@ -393,10 +421,10 @@ pub(super) fn run<W: World>(
                     .push(decided.elapsed().as_secs_f64() * 1e6);
                 runner.station.restart_clock();
                 let result = runner.manipulate(p, s).map(|backup| {
-                    runner.station.keep_backup(backup, products.len());
+                    runner.station.keep_backup(backup, i);
                 });
-                runner.station.measure(&mut report, p, s);
-                if let Err(why) = judge(&mut report, result) {
+                runner.station.measure(report, p, s);
+                if let Err(why) = judge(report, result) {
                     stopped = true;
                     if let Failure::Collision { contact } = why {
                         collisions.push(contact);
@@ -404,7 +432,6 @@ pub(super) fn run<W: World>(
                 }
             }
         }
-        products.push(report);
     }
     if let Err(Failure::Collision { contact }) = runner.station.flush_backup(&mut products) {
         collisions.push(contact);
