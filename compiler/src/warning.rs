@@ -5,7 +5,7 @@
 //! rendering lives in `diagnostic`.
 
 use crate::source::Loc;
-use crate::workspace::Pose;
+use crate::workspace::{Lower, Pose};
 use std::fmt;
 
 #[derive(Debug, Clone, PartialEq)]
@@ -61,6 +61,27 @@ pub enum Warning {
         slot_b: String,
         gap_mm: f64,
     },
+    /// A product over twice as tall as its narrow side, let go in a slot
+    /// more than twice that side above its box's floor: the arm cannot
+    /// lower it further (the wrist above a short suction cup meets the
+    /// box's rim), and dropped that far it can land tilted and fall over.
+    /// Asked of the empty box; a taller product packed beside it first
+    /// can make the drop longer.
+    DroppedHigh {
+        /// The assignment, or the generator that may place it so.
+        at: Loc,
+        product: String,
+        /// Where the product is defined.
+        product_at: Loc,
+        slot: String,
+        in_box: String,
+        drop_mm: f64,
+        height_mm: f64,
+        /// Its narrow side.
+        side_mm: f64,
+        /// What stops it lower, where the robot can tell.
+        lower: Option<Lower>,
+    },
 }
 
 /// The room (m) the motion planner keeps round a held product
@@ -68,6 +89,11 @@ pub enum Warning {
 /// depend on the robot crates, and a test in `packwright-pipeline` checks
 /// that the two agree).
 pub const HELD_ROOM: f64 = 0.003;
+
+/// How far (mm) above its box's floor the robot lets a product go where
+/// nothing stops it lower (`packwright_motion::expert::RELEASE_GAP`; a
+/// test in `packwright-pipeline` checks that the two agree).
+pub const RELEASE_GAP_MM: f64 = 5.0;
 
 impl fmt::Display for Warning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -123,6 +149,16 @@ impl fmt::Display for Warning {
                 "products `{a}` in slot `{slot_a}` and `{b}` in slot `{slot_b}` are {gap_mm:.1} mm apart, less than the {:.0} mm the robot keeps round a product it holds",
                 HELD_ROOM * 1000.0
             ),
+            Warning::DroppedHigh {
+                product,
+                slot,
+                in_box,
+                drop_mm,
+                ..
+            } => write!(
+                f,
+                "product `{product}` is let go {drop_mm:.0} mm above the floor of box `{in_box}` in slot `{slot}`: the arm cannot lower it further"
+            ),
         }
     }
 }
@@ -134,6 +170,7 @@ impl Warning {
             Warning::PickBlocked { .. } => "W001",
             Warning::TooClose { .. } => "W002",
             Warning::DrawnPickBlocked { .. } => "W003",
+            Warning::DroppedHigh { .. } => "W004",
         }
     }
 
@@ -142,7 +179,8 @@ impl Warning {
         match self {
             Warning::PickBlocked { at, .. }
             | Warning::TooClose { at, .. }
-            | Warning::DrawnPickBlocked { at, .. } => *at,
+            | Warning::DrawnPickBlocked { at, .. }
+            | Warning::DroppedHigh { at, .. } => *at,
         }
     }
 
@@ -157,6 +195,7 @@ impl Warning {
                 "moves each product up to {jitter_mm:.0} mm, two products up to {:.0} mm nearer each other",
                 2.0 * jitter_mm
             ),
+            Warning::DroppedHigh { drop_mm, .. } => format!("drops it {drop_mm:.0} mm"),
         }
     }
 
@@ -170,6 +209,16 @@ impl Warning {
             Warning::DrawnPickBlocked { by, by_at, .. } => {
                 vec![(*by_at, format!("`{by}` stands here"))]
             }
+            Warning::DroppedHigh {
+                product,
+                product_at,
+                height_mm,
+                side_mm,
+                ..
+            } => vec![(
+                *product_at,
+                format!("`{product}` stands {height_mm:.0} mm tall on a {side_mm:.0} mm side"),
+            )],
             Warning::PickBlocked { .. } | Warning::TooClose { .. } => Vec::new(),
         }
     }
@@ -202,6 +251,27 @@ impl Warning {
                 "the one packed second cannot be lowered past the other: it is let go above the other's top and can land on it; move the slots at least {:.1} mm further apart",
                 (HELD_ROOM * 1000.0 - gap_mm).max(0.1)
             ),
+            Warning::DroppedHigh { in_box, lower, .. } => {
+                let fix = match lower {
+                    Some(Lower::ProductOnBox) => format!(
+                        "lower down, the product meets box `{in_box}` (the robot keeps {:.0} mm round a product it holds): move the slot further from the box's wall, or use a box with more room",
+                        HELD_ROOM * 1000.0
+                    ),
+                    Some(Lower::ArmOnBox(part)) => format!(
+                        "lower down, `{part}` meets box `{in_box}`: a longer suction cup or a shallower box may let the arm lower it to {RELEASE_GAP_MM:.0} mm above the floor"
+                    ),
+                    Some(Lower::Other(what)) => format!(
+                        "lower down, {what}: move the box or the slot where the arm reaches lower"
+                    ),
+                    None => {
+                        "give the slot more room, or use a longer suction cup or a shallower box"
+                            .to_owned()
+                    }
+                };
+                format!(
+                    "dropped more than twice its width, a product over twice as tall as it is wide can land tilted and fall over, with every planner; {fix}"
+                )
+            }
         }
     }
 }

@@ -120,6 +120,28 @@ pub struct Unreached {
     pub tip: [f64; 3],
 }
 
+/// What the robot does at a release it reaches, where it can tell: how
+/// far (m) above its box's floor the product's bottom is when it is let
+/// go (the drop it falls; the expert's 5 mm, or more where the arm cannot
+/// go lower), and what stops it lower.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Released {
+    pub drop: Option<f64>,
+    pub lower: Option<Lower>,
+}
+
+/// What meets the box where a release is let go lower.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Lower {
+    /// The held product, padded, meets the box (a wall it stands too
+    /// near).
+    ProductOnBox,
+    /// A part of the arm (a link by name, or the cup) meets the box.
+    ArmOnBox(String),
+    /// Something else, as the robot names it.
+    Other(String),
+}
+
 /// A product standing in the cell when a package starts: an inventory
 /// entry's product (an index into `Model::products`) at its place.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -159,9 +181,9 @@ pub trait Workspace {
     /// reached, if any.
     fn pick(&self, m: &Model, cell: usize, product: usize, at: [f64; 2]) -> Option<Unreached>;
 
-    /// Placing it, picked at `at`, into slot `slot` of the cell: the
-    /// first placing pose (approach, above the slot, release) that cannot
-    /// be reached, if any.
+    /// Placing it, picked at `at`, into slot `slot` of the (empty) cell:
+    /// the first placing pose (approach, above the slot, release) that
+    /// cannot be reached, else how the product is let go.
     fn place(
         &self,
         m: &Model,
@@ -169,7 +191,7 @@ pub trait Workspace {
         product: usize,
         at: [f64; 2],
         slot: usize,
-    ) -> Option<Unreached>;
+    ) -> Result<Released, Unreached>;
 
     /// The start pose of cell `cell` (which the empty cell reaches) with
     /// `standing` products where they stand: the one every branch of it
@@ -208,10 +230,33 @@ impl Workspace for Anywhere {
         None
     }
 
-    fn place(&self, _: &Model, _: usize, _: usize, _: [f64; 2], _: usize) -> Option<Unreached> {
-        None
+    fn place(
+        &self,
+        _: &Model,
+        _: usize,
+        _: usize,
+        _: [f64; 2],
+        _: usize,
+    ) -> Result<Released, Unreached> {
+        Ok(Released::default())
     }
 }
+
+/// How many times its narrow side a product may stand tall, and fall,
+/// before a drop can tip it over: a product over twice as tall as it is
+/// wide, let go more than twice its width above the floor, can land
+/// tilted and fall over (README, W004).
+pub const TOPPLE_RATIO: f64 = 2.0;
+
+/// Whether a product `height` tall on a narrow side `side`, let go `drop`
+/// above the floor, can fall over ([`TOPPLE_RATIO`]).
+pub fn topples(height: f64, side: f64, drop: f64) -> bool {
+    height > TOPPLE_RATIO * side && drop > TOPPLE_RATIO * side
+}
+
+/// A product's highest drop into a box: the drop (m), what stops it
+/// lower, the slot and the statement that asked for it.
+type Dropped = (f64, Option<Lower>, usize, Loc);
 
 /// A product's place, as bits, so that each question is asked once.
 type Place = (usize, usize, [u64; 2]);
@@ -222,6 +267,8 @@ struct Asker<'a> {
     /// Picking questions asked, and whether every pose was reached.
     picked: BTreeMap<Place, bool>,
     placed: BTreeSet<(Place, usize)>,
+    /// The highest drop per (cell, product, box).
+    drops: BTreeMap<(usize, usize, usize), Dropped>,
     errors: Vec<Error>,
 }
 
@@ -263,8 +310,8 @@ impl Asker<'_> {
         if !self.placed.insert((place, slot)) {
             return;
         }
-        if let Some(u) = self.ws.place(self.m, inv.cell, product, at, slot) {
-            self.errors.push(Error::Unreachable {
+        match self.ws.place(self.m, inv.cell, product, at, slot) {
+            Err(u) => self.errors.push(Error::Unreachable {
                 at: loc,
                 task: Task::Place {
                     product: self.m.products[product].name.clone(),
@@ -273,8 +320,51 @@ impl Asker<'_> {
                 },
                 pose: u.pose,
                 tip: u.tip,
-            });
+            }),
+            Ok(Released {
+                drop: Some(drop),
+                lower,
+            }) => {
+                let Some(s) = self.m.cells[inv.cell].slots.get(slot) else {
+                    return;
+                };
+                let key = (inv.cell, product, s.box_index);
+                if self.drops.get(&key).is_none_or(|highest| drop > highest.0) {
+                    self.drops.insert(key, (drop, lower, slot, loc));
+                }
+            }
+            Ok(Released { drop: None, .. }) => {}
         }
+    }
+
+    /// [`Warning::DroppedHigh`] for each product dropped too far for its
+    /// shape ([`topples`]), once per box: its highest drop.
+    fn dropped_high(&self) -> Vec<Warning> {
+        self.drops
+            .iter()
+            .filter_map(|(&(cell, product, _), (drop, lower, slot, at))| {
+                let (drop, slot, at) = (*drop, *slot, *at);
+                let p = &self.m.products[product];
+                let c = &self.m.cells[cell];
+                let s = c.slots.get(slot)?;
+                let side = p.size[0].min(p.size[1]);
+                topples(p.size[2], side, drop).then(|| Warning::DroppedHigh {
+                    at,
+                    product: p.name.clone(),
+                    product_at: p.loc,
+                    slot: s.name.clone(),
+                    in_box: c
+                        .boxes
+                        .get(s.box_index)
+                        .map(|b| b.name.clone())
+                        .unwrap_or_default(),
+                    drop_mm: drop * 1000.0,
+                    height_mm: p.size[2] * 1000.0,
+                    side_mm: side * 1000.0,
+                    lower: lower.clone(),
+                })
+            })
+            .collect()
     }
 
     fn moved(&mut self, inv: &Inventory, order: usize, placed: &[Placed]) {
@@ -310,6 +400,7 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> (Vec<Error>, Vec<Warning>) {
         ws,
         picked: BTreeMap::new(),
         placed: BTreeSet::new(),
+        drops: BTreeMap::new(),
         errors: Vec::new(),
     };
     // The cells whose start the empty cell reaches.
@@ -355,7 +446,7 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> (Vec<Error>, Vec<Warning>) {
     for s in &m.scenario_sets {
         a.choose(&m.inventories[s.inventory], &s.choose);
     }
-    let mut warnings = Vec::new();
+    let mut warnings = a.dropped_high();
     for i in 0..m.inventories.len() {
         let cell = m.inventories[i].cell;
         standing(

@@ -1,7 +1,7 @@
 //! The compiler's documented semantics, on in-memory files.
 
 use packwright_compiler::model::Model;
-use packwright_compiler::workspace::{Blocked, Pose, Standing, Unreached};
+use packwright_compiler::workspace::{Blocked, Lower, Pose, Released, Standing, Unreached};
 use packwright_compiler::{Anywhere, Compiled, Error, MemoryLoader, Warning, check};
 use std::path::PathBuf;
 
@@ -378,8 +378,15 @@ impl packwright_compiler::Workspace for Crowded {
     fn pick(&self, _: &Model, _: usize, _: usize, _: [f64; 2]) -> Option<Unreached> {
         None
     }
-    fn place(&self, _: &Model, _: usize, _: usize, _: [f64; 2], _: usize) -> Option<Unreached> {
-        None
+    fn place(
+        &self,
+        _: &Model,
+        _: usize,
+        _: usize,
+        _: [f64; 2],
+        _: usize,
+    ) -> Result<Released, Unreached> {
+        Ok(Released::default())
     }
     fn start_among(&self, m: &Model, _: usize, standing: &[Standing]) -> Option<usize> {
         standing
@@ -501,8 +508,15 @@ impl packwright_compiler::Workspace for Near {
     fn pick(&self, _: &Model, _: usize, _: usize, _: [f64; 2]) -> Option<Unreached> {
         None
     }
-    fn place(&self, _: &Model, _: usize, _: usize, _: [f64; 2], _: usize) -> Option<Unreached> {
-        None
+    fn place(
+        &self,
+        _: &Model,
+        _: usize,
+        _: usize,
+        _: [f64; 2],
+        _: usize,
+    ) -> Result<Released, Unreached> {
+        Ok(Released::default())
     }
     fn pick_among(
         &self,
@@ -593,4 +607,81 @@ fn a_pick_the_suites_draws_block_is_a_warning_naming_those_scenarios() {
             c.warnings
         );
     }
+}
+
+/// A workspace that lets every product go `DEEP` above the floor in slot
+/// `g4` and at the usual 5 mm elsewhere.
+struct Deep;
+
+const DEEP: f64 = 0.09;
+
+impl packwright_compiler::Workspace for Deep {
+    fn start(&self, _: &Model, _: usize) -> Option<Unreached> {
+        None
+    }
+    fn pick(&self, _: &Model, _: usize, _: usize, _: [f64; 2]) -> Option<Unreached> {
+        None
+    }
+    fn place(
+        &self,
+        m: &Model,
+        cell: usize,
+        _: usize,
+        _: [f64; 2],
+        slot: usize,
+    ) -> Result<Released, Unreached> {
+        let deep = m.cells[cell].slots[slot].name == "g4";
+        Ok(Released {
+            drop: Some(if deep { DEEP } else { 0.005 }),
+            lower: deep.then(|| Lower::ArmOnBox("wrist_3_link".into())),
+        })
+    }
+}
+
+/// W004: a product over twice as tall as its narrow side, dropped more
+/// than twice that side, is warned about once per box, at its highest
+/// drop, with the cup that would let it down; a cube dropped as far, or
+/// a tall product let go low, is not.
+#[test]
+fn a_tall_narrow_product_dropped_high_is_warned_about_once() {
+    let cell = CELL.replace(
+        "product E box (60 mm, 40 mm, 30 mm)",
+        "product E box (60 mm, 40 mm, 30 mm)\nproduct T box (30 mm, 40 mm, 100 mm)",
+    );
+    let cell = cell.replace(
+        "  E (0.68, -0.38)\n",
+        "  E (0.68, -0.38)\n  T (0.80, -0.38)\n",
+    );
+    let warned = |extra: &str| {
+        let loader = MemoryLoader::new().with("main.pack", format!("{cell}\n{extra}"));
+        match check(&loader, &[PathBuf::from("main.pack")], &Deep) {
+            Ok(c) => c.warnings,
+            Err(f) => panic!("{:#?}", f.errors),
+        }
+    };
+    let w = warned(
+        "scenarios s for stock5 {\n choose 2 of A, T into g1, g2, g4\n count 2\n}\n\
+         order o for stock5 {\n T -> g4\n A -> g1\n}\n",
+    );
+    assert_eq!(w.len(), 1, "{w:#?}");
+    let Warning::DroppedHigh {
+        product,
+        slot,
+        drop_mm,
+        ..
+    } = &w[0]
+    else {
+        panic!("a drop: {w:#?}");
+    };
+    assert_eq!((product.as_str(), slot.as_str()), ("T", "g4"));
+    assert!((drop_mm - 90.0).abs() < 1e-9);
+    assert_eq!(w[0].code(), "W004");
+    assert!(
+        w[0].help()
+            .contains("`wrist_3_link` meets box `tray`: a longer suction cup"),
+        "{}",
+        w[0].help()
+    );
+    // Let go at 5 mm, or a cube: nothing to say.
+    assert!(warned("order o for stock5 {\n T -> g1\n A -> g4\n}\n").is_empty());
 }

@@ -10,8 +10,9 @@ use crate::error::PipelineError;
 use packwright_compiler::Workspace;
 use packwright_compiler::emit::cell_record;
 use packwright_compiler::model::Model;
-use packwright_compiler::workspace::{Blocked, Pose, Standing, Unreached};
-use packwright_interface::outcome::Stage;
+use packwright_compiler::workspace::{Blocked, Lower, Pose, Released, Standing, Unreached};
+use packwright_interface::outcome::{Hit, Stage};
+use packwright_interface::world::Body;
 use packwright_motion::collision::ProductBody;
 use packwright_motion::execute::{self, Reachability};
 use std::cell::RefCell;
@@ -94,6 +95,21 @@ fn pose(u: execute::Unreached) -> Unreached {
     Unreached { pose, tip: u.tip }
 }
 
+/// What a raised release meets lower down, in the compiler's terms.
+fn lower(hit: Hit) -> Lower {
+    match hit {
+        Hit::Bodies {
+            a: Body::Held(_),
+            b: Body::Box(_),
+        } => Lower::ProductOnBox,
+        Hit::Bodies {
+            a: part @ (Body::Link(_) | Body::Cup),
+            b: Body::Box(_),
+        } => Lower::ArmOnBox(part.to_string()),
+        other => Lower::Other(other.to_string()),
+    }
+}
+
 impl Workspace for RobotWorkspace {
     fn robot(&self, m: &Model, cell: usize) -> Option<String> {
         self.with(m, cell, |built| built.as_ref().err().cloned().flatten())
@@ -122,10 +138,18 @@ impl Workspace for RobotWorkspace {
         product: usize,
         at: [f64; 2],
         slot: usize,
-    ) -> Option<Unreached> {
-        let size = m.products.get(product)?.size;
-        self.ask(m, cell, |r| r.placing(size, at, slot).err().map(pose))
-            .flatten()
+    ) -> Result<Released, Unreached> {
+        let Some(size) = m.products.get(product).map(|p| p.size) else {
+            return Ok(Released::default());
+        };
+        self.ask(m, cell, |r| r.placing(size, at, slot))
+            .map_or(Ok(Released::default()), |placed| match placed {
+                Ok(release) => Ok(Released {
+                    drop: Some(release.drop),
+                    lower: release.lower.map(lower),
+                }),
+                Err(u) => Err(pose(u)),
+            })
     }
 
     fn start_among(&self, m: &Model, cell: usize, standing: &[Standing]) -> Option<usize> {
@@ -170,6 +194,16 @@ mod tests {
         assert_eq!(
             packwright_compiler::HELD_ROOM,
             packwright_kinematics::body::HELD_PADDING
+        );
+    }
+
+    /// W004's fix names the height the expert lets a product go at
+    /// where nothing stops it lower: the compiler's copy must agree.
+    #[test]
+    fn the_compilers_release_gap_is_the_experts() {
+        assert_eq!(
+            packwright_compiler::RELEASE_GAP_MM / 1000.0,
+            packwright_motion::expert::RELEASE_GAP
         );
     }
 }

@@ -28,7 +28,7 @@ mod station;
 mod vias;
 
 pub use learned::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps, tolerance};
-pub use reachable::{Reachability, Unreached};
+pub use reachable::{Reachability, Release, Unreached};
 pub use reasoner::{demonstrated_decisions, expected_next, graph, reasoner_trial};
 pub use station::{
     HOME_HEIGHT, Load, PlanningBudget, STOP_CLEARANCE, Unchecked, checked_blend, checked_blend_by,

@@ -39,6 +39,18 @@ pub struct Unreached {
     pub tip: [f64; 3],
 }
 
+/// How the expert lets a product go in a slot it reaches.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Release {
+    /// How far (m) above the box's floor the product's bottom is when it
+    /// is let go ([`expert::RELEASE_GAP`], or more where the release is
+    /// raised): the drop it falls.
+    pub drop: f64,
+    /// Where the release is raised: what the arm or the held product
+    /// meets at the release's own height.
+    pub lower: Option<Hit>,
+}
+
 /// The reach of one arm in one cell.
 #[derive(Clone)]
 pub struct Reachability {
@@ -246,8 +258,9 @@ impl Reachability {
     /// free solution reaches (the release: straight down from a free
     /// solution above the slot, at some height up to that point's, for the
     /// product then drops the rest; the approach and the point above the
-    /// slot are joined by a swing or a search, not checked here).
-    pub fn placing(&self, size: [f64; 3], at: [f64; 2], slot: usize) -> Result<(), Unreached> {
+    /// slot are joined by a swing or a search, not checked here). When
+    /// every sub-goal is reached: how the product is let go.
+    pub fn placing(&self, size: [f64; 3], at: [f64; 2], slot: usize) -> Result<Release, Unreached> {
         let Some(spec) = self.cell.slots.get(slot) else {
             return Err(Unreached {
                 stage: Stage::Placing,
@@ -278,9 +291,20 @@ impl Reachability {
                 .collect()
         };
         let mut above = Vec::new();
+        let mut release = Release {
+            drop: expert::RELEASE_GAP,
+            lower: None,
+        };
         for (k, goal) in goals.iter().enumerate() {
             let reached = match k {
-                2 => self.step(goal, &raised, Some(&above), load),
+                2 => raised
+                    .iter()
+                    .find_map(|z| {
+                        let free = self.step(goal, &[*z], Some(&above), load);
+                        release.drop = expert::RELEASE_GAP + (z - goal.tip[2]);
+                        (!free.is_empty()).then_some(free)
+                    })
+                    .unwrap_or_default(),
                 _ => self.step(goal, &carried(goal), None, load),
             };
             if reached.is_empty() {
@@ -290,9 +314,27 @@ impl Reachability {
                     tip: goal.tip,
                 });
             }
+            if k == 2 && release.drop > expert::RELEASE_GAP + 1e-9 {
+                release.lower = self.met_at(goal, &above, load);
+            }
             above = reached;
         }
-        Ok(())
+        Ok(release)
+    }
+
+    /// What the arm or the held product meets at `goal` itself: in the
+    /// nearest solution's pose, else on its straight motion from one of
+    /// `from`.
+    fn met_at(&self, goal: &SubGoal, from: &[Joints], load: Load) -> Option<Hit> {
+        let tip = Point3::new(goal.tip[0], goal.tip[1], goal.tip[2]);
+        solutions(&self.checker, tip, 0.0, &self.near)
+            .iter()
+            .find_map(|q| {
+                self.checker.check(q, load.held, load.ignore).or_else(|| {
+                    from.iter()
+                        .find_map(|p| self.checker.check_motion(p, q, load.held, load.ignore))
+                })
+            })
     }
 }
 
