@@ -266,3 +266,30 @@ order three for shelf {
         assert_eq!(turns, expected, "{planner}");
     }
 }
+
+/// A box far behind the robot (`tests/cells/far_behind.pack`, a helper's
+/// probe cell): after the first product, the upper arm met the table at
+/// every height of the second's release from the arm's shape above the
+/// slot, and the expert and RRT-Connect stopped where `check` accepted
+/// the cell. The point above the slot is now solved in the release's
+/// shape.
+#[test]
+fn a_release_far_behind_the_robot_is_reached_in_its_own_arm_shape() {
+    for planner in ["expert", "rrt"] {
+        let out = packwright(&[
+            "execute",
+            "tests/cells/far_behind.pack",
+            "--order",
+            "two",
+            "--planner",
+            planner,
+            "--json",
+        ]);
+        assert!(
+            out.status.success(),
+            "{planner}: exit {:?}\n{}",
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout)
+        );
+    }
+}

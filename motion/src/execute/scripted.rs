@@ -110,6 +110,44 @@ impl<W: World> Scripted<'_, W> {
         )
     }
 
+    /// The placing sub-goals with the point above the slot and the
+    /// release solved from the release's arm shape
+    /// ([`Station::release_shape`]), the approach as [`plan_stage`]
+    /// solves it; timed as the approach's, the point above the slot's
+    /// (the search) and the release's planning.
+    ///
+    /// [`plan_stage`]: Scripted::plan_stage
+    fn release_stage(
+        &mut self,
+        from: Joints,
+        goals: &[SubGoal; 3],
+        loads: [Load; 3],
+    ) -> Option<Vec<Planned>> {
+        let mut plan = self
+            .plan_stage(from, &goals[..1], 0.0, [loads[0]; 3])
+            .ok()?;
+        let approach = plan.first()?.solved.joints;
+        let started = self.station.begin();
+        let shaped = self
+            .station
+            .release_shape([&goals[1], &goals[2]], &approach, 0.0, loads[1]);
+        let took = self.station.spend(2, started).ok()?;
+        let [above, release] = shaped?;
+        plan.push(Planned {
+            goal: goals[1],
+            solved: above,
+            ceiling: goals[0].tip[2],
+            solve_us: took * 1e6,
+        });
+        plan.push(Planned {
+            goal: goals[2],
+            solved: release,
+            ceiling: goals[1].tip[2],
+            solve_us: 0.0,
+        });
+        Some(plan)
+    }
+
     /// How much the run has recorded: the sub-goals reached and, when
     /// demonstrations are recorded, their samples.
     fn marks(&self) -> [usize; 3] {
@@ -315,7 +353,16 @@ impl<W: World> Scripted<'_, W> {
         let carrying = Load::holding(&held);
         // Placing the product square in its slot: yaw 0 (it turns with the cup).
         let from = leg_end(&lift).unwrap_or(obs.joints);
-        let plan = self.plan_stage(from, &placing, 0.0, [carrying; 3])?;
+        let plan = match self.plan_stage(from, &placing, 0.0, [carrying; 3]) {
+            Ok(plan) => plan,
+            // No free way down into the slot from the point above it in
+            // the arm's shape nearest where it is: the point above the
+            // slot in the release's shape ([`Station::release_shape`]).
+            Err(why) if releasing_blocked(&why) => self
+                .release_stage(from, &placing, [carrying; 3])
+                .ok_or(why)?,
+            Err(why) => return Err(why),
+        };
         let place = StageInfo {
             stage: Stage::Placing,
             feature: task.slot_rim(s),
@@ -348,6 +395,18 @@ fn gripping_blocked(why: &Failure) -> bool {
         Failure::Unreachable { subgoal: 2 | 3, .. }
             | Failure::NoPath { subgoal: 2 | 3 }
             | Failure::WouldCollide { subgoal: 2 | 3, .. }
+    )
+}
+
+/// Whether a placing stage's failure `why` can come from the arm's shape
+/// above the slot (no free way down to the release) rather than from the
+/// budget or the smoother.
+fn releasing_blocked(why: &Failure) -> bool {
+    matches!(
+        why,
+        Failure::Unreachable { subgoal: 3, .. }
+            | Failure::NoPath { subgoal: 3 }
+            | Failure::WouldCollide { subgoal: 3, .. }
     )
 }
 

@@ -650,6 +650,56 @@ impl<'a, W: World> Station<'a, W> {
             })
     }
 
+    /// A placing stage's point above the slot and release solved from
+    /// the release's arm shape rather than from where the arm is: for
+    /// each free release solution (at the release's height, then raised
+    /// as [`Station::solve`] raises it, up to the point above the slot),
+    /// nearest `from` first, the point above the slot in the same shape
+    /// (its free solution nearest the release) when the straight descent
+    /// between them is free. The shape nearest the arm can leave no free
+    /// way down: a box far behind the base, reached low with the upper
+    /// arm over the table. The descent is kept, checked, with its joints;
+    /// the way to the point above the slot is the caller's. `None` when
+    /// no shape does, or the sub-goal's budget runs out.
+    pub fn release_shape(
+        &self,
+        goals: [&SubGoal; 2],
+        from: &Joints,
+        yaw: f64,
+        load: Load,
+    ) -> Option<[Solved; 2]> {
+        let [above, release] = goals;
+        let point = |g: &SubGoal, z: f64| Point3::new(g.tip[0], g.tip[1], z);
+        std::iter::once(release.tip[2])
+            .chain(raises(release.tip[2], MAX_RAISES))
+            .take_while(|z| *z <= above.tip[2])
+            .take_while(|_| !self.late())
+            .find_map(|z| {
+                solutions(&self.checker, point(release, z), yaw, from)
+                    .into_iter()
+                    .filter(|q| {
+                        self.arm.within_limits(q)
+                            && self.checker.check(q, load.held, load.ignore).is_none()
+                    })
+                    .take_while(|_| !self.late())
+                    .find_map(|at| {
+                        let over =
+                            reach(&self.checker, point(above, above.tip[2]), yaw, &at, load)?;
+                        let down = self.checked(3, over, &[at], load).ok()?;
+                        Some([
+                            Solved {
+                                joints: over,
+                                straight: None,
+                            },
+                            Solved {
+                                joints: at,
+                                straight: Some((over, down)),
+                            },
+                        ])
+                    })
+            })
+    }
+
     /// The checked commands from `from` to `to` for sub-goal `k`.
     ///
     /// Both ways first try the straight joint-space motion and, when its
