@@ -1207,7 +1207,14 @@ impl<W: World> Learned<'_, W> {
                             .backed_up(start, above[2], load)
                             .ok_or_else(|| first.clone())?;
                         let why = match first {
-                            Failure::WouldCollide { hit, .. } => Shortfall::Collides { hit },
+                            Failure::WouldCollide { hit, .. }
+                            | Failure::Unreachable { met: Some(hit), .. } => {
+                                Shortfall::Collides { hit }
+                            }
+                            Failure::Unreachable { way: Some(hit), .. } => {
+                                Shortfall::Collides { hit: *hit }
+                            }
+                            Failure::Smoothing { reason, .. } => Shortfall::Smoothing { reason },
                             _ => Shortfall::Short {
                                 steps: 0,
                                 distance_m: (above[2] - self.station.tip(&start)[2]).abs(),
