@@ -634,20 +634,36 @@ impl<'a, W: World> Station<'a, W> {
                     .solve(lift, 3, &at, yaw, Load::holding(&gripped), lift.tip[2])
                     .ok()?;
                 up.straight.as_ref().filter(|(start, _)| *start == at)?;
-                let over = reach(&self.checker, point(hover), yaw, &at, free)?;
-                let down = self.checked(2, over, &[at], guarded).ok()?;
-                Some([
-                    Solved {
-                        joints: over,
-                        straight: None,
-                    },
-                    Solved {
-                        joints: at,
-                        straight: Some((over, down)),
-                    },
-                    up,
-                ])
+                let [over, down] =
+                    self.descent_in_shape(2, point(hover), at, yaw, [free, guarded])?;
+                Some([over, down, up])
             })
+    }
+
+    /// Sub-goal `k` reached straight down from `over` in the arm's shape
+    /// at `at`: `over`'s free solution nearest `at` (free carrying
+    /// `loads[0]`) and `at` with the checked straight descent to it
+    /// (carrying `loads[1]`).
+    fn descent_in_shape(
+        &self,
+        k: usize,
+        over: Point3<f64>,
+        at: Joints,
+        yaw: f64,
+        loads: [Load; 2],
+    ) -> Option<[Solved; 2]> {
+        let above = reach(&self.checker, over, yaw, &at, loads[0])?;
+        let down = self.checked(k, above, &[at], loads[1]).ok()?;
+        Some([
+            Solved {
+                joints: above,
+                straight: None,
+            },
+            Solved {
+                joints: at,
+                straight: Some((above, down)),
+            },
+        ])
     }
 
     /// A placing stage's point above the slot and release solved from
@@ -683,19 +699,7 @@ impl<'a, W: World> Station<'a, W> {
                     })
                     .take_while(|_| !self.late())
                     .find_map(|at| {
-                        let over =
-                            reach(&self.checker, point(above, above.tip[2]), yaw, &at, load)?;
-                        let down = self.checked(3, over, &[at], load).ok()?;
-                        Some([
-                            Solved {
-                                joints: over,
-                                straight: None,
-                            },
-                            Solved {
-                                joints: at,
-                                straight: Some((over, down)),
-                            },
-                        ])
+                        self.descent_in_shape(3, point(above, above.tip[2]), at, yaw, [load; 2])
                     })
             })
     }
