@@ -293,3 +293,52 @@ fn a_release_far_behind_the_robot_is_reached_in_its_own_arm_shape() {
         );
     }
 }
+
+/// A crate in front and a tall product behind (`tests/cells/far_corner.pack`,
+/// a helper's probe cell): after a release in the crate's far corner,
+/// the only free hover over the product has wrist 1 3.1 rad away past
+/// the forearm, which RRT-Connect's samples did not find a way to; the
+/// expert and RRT-Connect stopped, and the cell's one demonstration could
+/// not be replayed. The same pose with wrist 1 a whole turn round is
+/// searched for too.
+#[test]
+fn a_hover_past_the_forearm_is_searched_for_a_whole_turn_round() {
+    let pack = "tests/cells/far_corner.pack";
+    for planner in ["expert", "rrt"] {
+        let out = packwright(&[
+            "execute",
+            pack,
+            "--order",
+            "corner",
+            "--planner",
+            planner,
+            "--json",
+        ]);
+        assert!(
+            out.status.success(),
+            "{planner}: exit {:?}\n{}",
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout)
+        );
+    }
+    let dir = scratch("expert", "far-corner");
+    let compiled = dir.join("compiled");
+    let motion = dir.join("motion.safetensors");
+    let out = packwright(&["compile", pack, "-o", compiled.to_str().expect("utf-8")]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = packwright(&[
+        "demonstrate",
+        compiled.to_str().expect("utf-8"),
+        "-o",
+        motion.to_str().expect("utf-8"),
+    ]);
+    assert!(
+        out.status.success(),
+        "the demonstration replays: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -269,8 +269,7 @@ impl<W: World> Scripted<'_, W> {
             let routed = match (how, routed, target) {
                 (Connect::Straight, Err(why @ Failure::WouldCollide { .. }), Some(target)) => self
                     .station
-                    .search(k as u64, k + 1, start, target, load)
-                    .map(|route| (target, route))
+                    .search_any(k as u64, k + 1, start, target, yaw, load)
                     .map_err(|_| why),
                 (_, routed, _) => routed,
             };

@@ -21,7 +21,7 @@ use packwright_interface::outcome::{
 use packwright_interface::world::{Contact, Observation, Seen, World};
 use packwright_interface::{CellScene, OrderTask};
 use packwright_kinematics::{Arm, DOF, Joints, joint_distance, tool_down_pose};
-use std::f64::consts::FRAC_PI_2;
+use std::f64::consts::{FRAC_PI_2, TAU};
 use std::time::{Duration, Instant};
 
 /// How much a release point is raised at a time when the wrist cannot
@@ -833,6 +833,37 @@ impl<'a, W: World> Station<'a, W> {
             Err(why @ (Failure::WouldCollide { .. } | Failure::NoPath { .. })) => why,
             Err(other) => return Err(other),
         };
+        let others = self.other_solutions(from, target, yaw, load);
+        let straight = others.iter().find_map(|&q| {
+            self.route(Connect::Straight, k, from, q, load)
+                .ok()
+                .map(|route| (q, route))
+        });
+        match (straight, how) {
+            (Some(found), _) => Some(found),
+            (None, Connect::Rrt { seed }) => {
+                let targets = self.searched_too(target, others);
+                self.search_among(seed, k, from, &targets, load)
+            }
+            (None, Connect::Straight) => None,
+        }
+        .ok_or(first)
+    }
+
+    /// What a search goes on to after `target` ([`Station::search_any`]):
+    /// its `others` (the other free solutions), then `target` and those
+    /// with one joint a whole turn round.
+    fn searched_too(&self, target: Joints, others: Vec<Joints>) -> Vec<Joints> {
+        let turned: Vec<Joints> = std::iter::once(target)
+            .chain(others.iter().copied())
+            .flat_map(|q| self.turned_round(q))
+            .collect();
+        others.into_iter().chain(turned).collect()
+    }
+
+    /// The free inverse-kinematics solutions of `target`'s cup pose other
+    /// than `target`, nearest `from` first.
+    fn other_solutions(&self, from: Joints, target: Joints, yaw: f64, load: Load) -> Vec<Joints> {
         let tip = self
             .arm
             .tool_tip(&self.base, &target, self.task.cell.suction);
@@ -842,12 +873,67 @@ impl<'a, W: World> Station<'a, W> {
                 joint_distance(q, &target) > 1e-12
                     && self.checker.check(q, load.held, load.ignore).is_none()
             })
-            .find_map(|q| {
-                self.route(Connect::Straight, k, from, q, load)
-                    .ok()
-                    .map(|route| (q, route))
-            })
+            .collect()
+    }
+
+    /// [`Station::search`] to each of `targets` in turn while the
+    /// deadline lasts: the first found, with the joints it reaches.
+    fn search_among(
+        &self,
+        seed: u64,
+        k: usize,
+        from: Joints,
+        targets: &[Joints],
+        load: Load,
+    ) -> Option<(Joints, Route)> {
+        targets
+            .iter()
+            .take_while(|_| !self.late())
+            .find_map(|&q| self.search(seed, k, from, q, load).ok().map(|r| (q, r)))
+    }
+
+    /// [`Station::search`] to `target`, else to another free
+    /// inverse-kinematics solution of the same cup pose, nearest `from`
+    /// first, else to the same solutions with one joint a whole turn
+    /// round (within its limits): the expert's last resort. Which of a
+    /// joint's two angles a solution takes decides how far the search
+    /// has to go, through what: swinging from a far corner of a box in
+    /// front to a tall product behind, wrist 1 had to turn 3.1 rad to
+    /// 4.17 rad, past the forearm, and 4,000 samples found no way, where
+    /// the same pose with wrist 1 at -2.11 rad was found at once. The
+    /// joints reached and the commands, or the search's failure to
+    /// `target`.
+    pub fn search_any(
+        &self,
+        seed: u64,
+        k: usize,
+        from: Joints,
+        target: Joints,
+        yaw: f64,
+        load: Load,
+    ) -> Result<(Joints, Route), Failure> {
+        let first = match self.search(seed, k, from, target, load) {
+            Ok(route) => return Ok((target, route)),
+            Err(why) => why,
+        };
+        let others = self.other_solutions(from, target, yaw, load);
+        let targets = self.searched_too(target, others);
+        self.search_among(seed, k, from, &targets, load)
             .ok_or(first)
+    }
+
+    /// `q` with one joint a whole turn round, each way, where that stays
+    /// within the joint's limits: the same pose.
+    fn turned_round(&self, q: Joints) -> Vec<Joints> {
+        (0..q.len())
+            .flat_map(|j| [-TAU, TAU].map(move |turn| (j, turn)))
+            .map(|(j, turn)| {
+                let mut p = q;
+                p[j] += turn;
+                p
+            })
+            .filter(|p| self.arm.within_limits(p))
+            .collect()
     }
 
     /// The checked commands from `start` through `waypoints` towards
