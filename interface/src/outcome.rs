@@ -167,6 +167,9 @@ pub enum Failure {
     Disappeared,
     /// The product was released this far (m) from its goal.
     Misplaced { error_m: f64 },
+    /// The cup did not grip the product: it still stands where it was
+    /// picked from, this far (m) from its goal.
+    NotGripped { error_m: f64 },
     /// The product was in its slot, then something moved it out.
     MovedLater,
     /// Planning ran past its wall-clock budget (the arm stops where it is).
@@ -236,6 +239,10 @@ impl fmt::Display for Failure {
             Failure::World { error } => write!(f, "{error}"),
             Failure::Disappeared => write!(f, "the product disappeared"),
             Failure::Misplaced { error_m } => write!(f, "released {error_m:.3} m from its goal"),
+            Failure::NotGripped { error_m } => write!(
+                f,
+                "not gripped: it still stands where it was picked from, {error_m:.3} m from its goal"
+            ),
             Failure::MovedLater => write!(f, "moved out of its slot later"),
             Failure::OutOfTime {
                 subgoal,
@@ -308,7 +315,9 @@ pub enum Shortfall {
     Collides { hit: Hit },
     /// The learned sub-goal where the suction switches lies this far (m,
     /// horizontally) from where the task needs it: the product's centre
-    /// (the grip) or the slot (the release). No motion is tried to it.
+    /// (a grip whose cup tip would miss the top face, by the policy's
+    /// reach) or the slot (a release more than the success radius off).
+    /// No motion is tried to it.
     OffTarget { distance_m: f64 },
     /// A release raised over the expert's (the product drops the rest of
     /// the way) would drop the product onto its box's wall: it is `by_m`
@@ -361,7 +370,7 @@ impl fmt::Display for Shortfall {
             Shortfall::Collides { hit } => write!(f, "the policy's motion would collide ({hit})"),
             Shortfall::OffTarget { distance_m } => write!(
                 f,
-                "the learned sub-goal is {:.1} mm off the product's centre or the slot",
+                "the learned sub-goal is {:.1} mm off the product's centre (the cup would miss its top face) or the slot (more than the success radius)",
                 distance_m * 1e3
             ),
             Shortfall::OverWall { by_m } => write!(

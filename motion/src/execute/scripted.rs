@@ -471,7 +471,7 @@ pub(super) fn run<W: World>(
                 report.outcome = Outcome::AlreadyPacked;
             }
             Some(_) if stopped => {}
-            Some(_) => {
+            Some((stood, _)) => {
                 runner
                     .station
                     .timing
@@ -482,7 +482,8 @@ pub(super) fn run<W: World>(
                     runner.station.keep_backup(backup, i);
                 });
                 runner.station.measure(report, p, s);
-                if let Err(why) = judge(report, result) {
+                let unmoved = runner.station.unmoved(p, Some(stood));
+                if let Err(why) = judge(report, result, unmoved) {
                     stopped = true;
                     if let Failure::Collision { contact } = why {
                         collisions.push(contact);

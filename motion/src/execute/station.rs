@@ -1119,6 +1119,16 @@ impl<'a, W: World> Station<'a, W> {
     /// package's time.
     ///
     /// [`restart_clock`]: Station::restart_clock
+    /// Whether product `p` is seen within [`UNMOVED`] of `stood` (where
+    /// it stood when its handling began).
+    pub fn unmoved(&self, p: usize, stood: Option<[f64; 3]>) -> bool {
+        let now = self.world.observe();
+        match (now.find(&self.task.products[p].name), stood) {
+            (Some((centre, _)), Some(stood)) => distance(centre, stood) <= UNMOVED,
+            _ => false,
+        }
+    }
+
     pub fn measure(&mut self, row: &mut ProductReport, p: usize, s: usize) {
         self.handled += 1;
         row.turn.get_or_insert(self.handled);
@@ -1225,12 +1235,24 @@ pub(crate) fn settle_cycles(seconds: f64, period: f64) -> usize {
     }
 }
 
+/// How far (m) a product may be seen from where it stood when its
+/// handling began and still count as never moved (the simulator's
+/// products settle by a fraction of a millimetre).
+pub(crate) const UNMOVED: f64 = 0.003;
+
 /// The outcome of a measured `row` whose handling ended with `result`:
 /// packed when it rests within [`SUCCESS_RADIUS`] of its goal, else the
-/// failure (the handling's, or how far it was released from its goal).
-pub(crate) fn judge(row: &mut ProductReport, result: Result<(), Failure>) -> Result<(), Failure> {
+/// failure (the handling's, or how far it was released from its goal,
+/// or, when it still stands where it was picked from (`unmoved`), that
+/// the cup did not grip it).
+pub(crate) fn judge(
+    row: &mut ProductReport,
+    result: Result<(), Failure>,
+    unmoved: bool,
+) -> Result<(), Failure> {
     let result = result.and_then(|()| match row.error_m {
         Some(e) if e <= SUCCESS_RADIUS => Ok(()),
+        Some(error_m) if unmoved => Err(Failure::NotGripped { error_m }),
         e => Err(Failure::Misplaced {
             error_m: e.unwrap_or(f64::NAN),
         }),

@@ -603,3 +603,34 @@ fn grips_offers_every_free_shape_nearest_first_and_grip_is_the_first() {
         assert_eq!(up.straight.as_ref().map(|(from, _)| *from), Some(at.joints));
     }
 }
+
+/// A product the handling left more than the success radius from its
+/// goal is misplaced, or not gripped when it still stands where it was
+/// picked from (a learned grip beside a small product's face was
+/// reported as "released 1.399 m from its goal").
+#[test]
+fn a_product_left_where_it_stood_was_not_gripped() {
+    let row = |error_m| ProductReport {
+        product: "cube".into(),
+        slot: "s".into(),
+        planning_s: 0.0,
+        execution_s: 0.0,
+        bound_s: 0.0,
+        error_m: Some(error_m),
+        turn: Some(1),
+        outcome: Outcome::NotAttempted,
+    };
+    let mut r = row(1.399);
+    assert_eq!(
+        judge(&mut r, Ok(()), true),
+        Err(Failure::NotGripped { error_m: 1.399 })
+    );
+    let mut r = row(1.399);
+    assert_eq!(
+        judge(&mut r, Ok(()), false),
+        Err(Failure::Misplaced { error_m: 1.399 })
+    );
+    let mut r = row(0.001);
+    assert_eq!(judge(&mut r, Ok(()), true), Ok(()));
+    assert_eq!(r.outcome, Outcome::Packed);
+}

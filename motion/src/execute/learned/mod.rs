@@ -7,7 +7,8 @@
 //! would collide, hands the rest of the stage to RRT-Connect (a
 //! [`Fallback`]), which goes to the learned sub-goals, or to the expert's
 //! where no free motion reaches a learned one. A learned grip or release
-//! more than [`SUCCESS_RADIUS`] off the product's centre or the slot is not
+//! more than [`SUCCESS_RADIUS`] off the product's centre or the slot, or a
+//! grip whose cup tip would miss the top face ([`on_face`]), is not
 //! tried: RRT-Connect goes to the expert's. A decision that breaks the
 //! order stops the arm (a [`Violation`]).
 
@@ -112,12 +113,25 @@ struct StagePlan<'l> {
     /// lift) carry it off where it stood, hanging from the cup as the
     /// planned contact leaves it.
     gripped: Option<[f64; 3]>,
+    /// Picking: the product's yaw as seen (its top face's).
+    yaw: f64,
     /// The expert's sub-goals for the stage: where RRT-Connect goes
     /// instead of a learned sub-goal it cannot reach.
     expert: [SubGoal; 3],
     /// Placing: where the cup tip may let go with the held product and
     /// the cup clear of the box's walls ([`Inside`]).
     inside: Option<Inside>,
+}
+
+/// Whether a grip `(dx, dy)` from the centre of a product of `size` seen
+/// at `yaw` puts the cup tip on its top face, by as much as the policy's
+/// steps may end from it ([`REACHED`]): the simulator grips only there,
+/// as a cup sealing on the face does.
+fn on_face(dx: f64, dy: f64, size: [f64; 3], yaw: f64) -> bool {
+    let (sin, cos) = yaw.sin_cos();
+    let along = cos * dx + sin * dy;
+    let across = -sin * dx + cos * dy;
+    along.abs() <= size[0] / 2.0 - REACHED && across.abs() <= size[1] / 2.0 - REACHED
 }
 
 /// The back-up from a release, counted as the placing stage's fourth
@@ -663,12 +677,20 @@ impl<W: World> Learned<'_, W> {
             // A learned grip or release off the product's centre or the slot
             // would pack nothing, however well the arm reached it: the
             // expert's sub-goal is used instead (by RRT-Connect).
+            // A grip must also put the cup on the top face: a small
+            // product's (a 21 mm cube) is narrower than that radius.
             let off = (switch != Suction::Keep)
                 .then(|| {
                     let e = plan.expert[k].tip;
-                    (goal[0] - e[0]).hypot(goal[1] - e[1])
+                    let (dx, dy) = (goal[0] - e[0], goal[1] - e[1]);
+                    let beside = switch == Suction::On
+                        && plan
+                            .gripped
+                            .is_some_and(|size| !on_face(dx, dy, size, plan.yaw));
+                    let d = dx.hypot(dy);
+                    (d > SUCCESS_RADIUS || beside).then_some(d)
                 })
-                .filter(|d| *d > SUCCESS_RADIUS);
+                .flatten();
             // A placing stage's approach planned again in another arm
             // shape (below), replacing the one planned.
             let mut approach_again: Option<Route> = None;
@@ -1313,7 +1335,9 @@ impl<W: World> Learned<'_, W> {
         let result = self.manipulate(p, s).map(|backup| {
             self.station.keep_backup(vec![backup], row);
         });
+        let stood = obs.find(&product).map(|(centre, _)| centre);
         self.station.measure(&mut rows[row], p, s);
+        let unmoved = self.station.unmoved(p, stood);
         let handled = match result {
             // A placing decision that broke the order: the product was
             // not put anywhere (its row stays "not attempted").
@@ -1321,7 +1345,7 @@ impl<W: World> Learned<'_, W> {
             Err(Halt::Failed(why)) => Err(why),
             Ok(()) => Ok(()),
         };
-        judge(&mut rows[row], handled).map_err(Stopped::Failed)
+        judge(&mut rows[row], handled, unmoved).map_err(Stopped::Failed)
     }
 
     /// Picks product `p` and places it in slot `s`, after the kept back-up
@@ -1334,7 +1358,7 @@ impl<W: World> Learned<'_, W> {
         let name = spec.name.as_str();
         let obs = self.station.world.observe();
         self.station.sync_products(&obs);
-        let (centre, _) = obs.find(name).ok_or(Failure::Disappeared)?;
+        let (centre, yaw) = obs.find(name).ok_or(Failure::Disappeared)?;
         // The back-up before is sent with the hover, and the lift with the
         // carry, blended into them.
         let backup = self.station.take_backup();
@@ -1347,6 +1371,7 @@ impl<W: World> Learned<'_, W> {
                 contact: Some(centre[2] + spec.size[2] / 2.0),
                 load: Load::picking(name),
                 gripped: Some(spec.size),
+                yaw,
                 expert: expert::picking(centre, spec.size[2], cell.lift),
                 inside: None,
             },
@@ -1415,6 +1440,7 @@ impl<W: World> Learned<'_, W> {
                 contact: None,
                 load: Load::holding(&held),
                 gripped: None,
+                yaw: 0.0,
                 expert,
                 inside: Inside::new(cell, cell.slots[s].box_index, spec.size, grip, &flange).map(
                     |inside| inside.with_wrist(cell.suction, wrist_around_tool(self.station.arm)),
@@ -1495,4 +1521,25 @@ pub(super) fn run<W: World>(
     report.complete &= violations.is_empty();
     report.violations = violations;
     report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::on_face;
+
+    /// A grip 9 mm off the centre of a 21 mm cube misses its face; 7 mm
+    /// off along both sides, it is on it. A 60 x 30 mm face turned a
+    /// quarter turn is 60 mm along y: 25 mm along y is on it, 25 mm along
+    /// x is not.
+    #[test]
+    fn a_grip_is_on_the_face_only_within_its_sides() {
+        let small = [0.021, 0.021, 0.021];
+        assert!(!on_face(0.009, 0.0, small, 0.0));
+        assert!(on_face(0.007, -0.007, small, 0.0));
+        let long = [0.06, 0.03, 0.05];
+        let quarter = std::f64::consts::FRAC_PI_2;
+        assert!(on_face(0.0, 0.025, long, quarter));
+        assert!(!on_face(0.025, 0.0, long, quarter));
+        assert!(on_face(0.025, 0.0, long, 0.0));
+    }
 }
