@@ -16,6 +16,21 @@
 mod common;
 use common::{packwright, scratch};
 use std::fs;
+use std::process::Output;
+
+/// `packwright` with `args`, which must exit 0 (the package complete):
+/// else the test fails with its report.
+fn packs(args: &[&str]) -> Output {
+    let out = packwright(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: exit {:?}\n{}\n{}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
 
 #[test]
 fn front_to_back_packages_are_packed_by_the_expert_and_rrt_connect() {
@@ -40,7 +55,7 @@ fn front_to_back_packages_are_packed_by_the_expert_and_rrt_connect() {
         ("gen_1_case1_n2/15", "expert"),
         ("gen_1_case1_n1/05", "rrt"),
     ] {
-        let out = packwright(&[
+        packs(&[
             "execute",
             pack,
             "--scenario",
@@ -49,12 +64,6 @@ fn front_to_back_packages_are_packed_by_the_expert_and_rrt_connect() {
             planner,
             "--json",
         ]);
-        assert!(
-            out.status.success(),
-            "{scenario} with {planner}: exit {:?}\n{}",
-            out.status.code(),
-            String::from_utf8_lossy(&out.stdout)
-        );
     }
 }
 
@@ -174,7 +183,7 @@ fn the_expert_searches_where_every_straight_way_collides() {
 /// the expert gave up on the card's hover after the first path.
 #[test]
 fn a_searched_path_whose_commands_collide_is_searched_for_again() {
-    let out = packwright(&[
+    packs(&[
         "execute",
         "tests/cells/florist.pack",
         "--scenario",
@@ -183,12 +192,6 @@ fn a_searched_path_whose_commands_collide_is_searched_for_again() {
         "expert",
         "--json",
     ]);
-    assert!(
-        out.status.success(),
-        "exit {:?}\n{}",
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout)
-    );
 }
 
 /// The expert and RRT-Connect pack in the order the file's demonstrations
@@ -233,7 +236,7 @@ order three for shelf {
     fs::write(&pack, text).expect("write the cell");
     let pack = pack.to_str().expect("utf-8");
     for planner in ["expert", "rrt"] {
-        let out = packwright(&[
+        let out = packs(&[
             "execute",
             pack,
             "--order",
@@ -242,12 +245,6 @@ order three for shelf {
             planner,
             "--json",
         ]);
-        assert!(
-            out.status.success(),
-            "{planner}: exit {:?}\n{}",
-            out.status.code(),
-            String::from_utf8_lossy(&out.stdout)
-        );
         let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("a JSON report");
         let turns: Vec<(String, u64)> = report["products"]
             .as_array()
@@ -276,7 +273,7 @@ order three for shelf {
 #[test]
 fn a_release_far_behind_the_robot_is_reached_in_its_own_arm_shape() {
     for planner in ["expert", "rrt"] {
-        let out = packwright(&[
+        packs(&[
             "execute",
             "tests/cells/far_behind.pack",
             "--order",
@@ -285,12 +282,6 @@ fn a_release_far_behind_the_robot_is_reached_in_its_own_arm_shape() {
             planner,
             "--json",
         ]);
-        assert!(
-            out.status.success(),
-            "{planner}: exit {:?}\n{}",
-            out.status.code(),
-            String::from_utf8_lossy(&out.stdout)
-        );
     }
 }
 
@@ -305,7 +296,7 @@ fn a_release_far_behind_the_robot_is_reached_in_its_own_arm_shape() {
 fn a_hover_past_the_forearm_is_searched_for_a_whole_turn_round() {
     let pack = "tests/cells/far_corner.pack";
     for planner in ["expert", "rrt"] {
-        let out = packwright(&[
+        packs(&[
             "execute",
             pack,
             "--order",
@@ -314,12 +305,6 @@ fn a_hover_past_the_forearm_is_searched_for_a_whole_turn_round() {
             planner,
             "--json",
         ]);
-        assert!(
-            out.status.success(),
-            "{planner}: exit {:?}\n{}",
-            out.status.code(),
-            String::from_utf8_lossy(&out.stdout)
-        );
     }
     let dir = scratch("expert", "far-corner");
     let compiled = dir.join("compiled");
