@@ -294,3 +294,101 @@ fn demonstrations_in_random_order_teach_the_inventorys_order() {
         "{stderr}"
     );
 }
+
+/// A model taught two cells follows one order for both: where a cell's
+/// own demonstrations, read alone, order its products otherwise
+/// (`right`'s one demonstration reads as descending; taught with `left`,
+/// the model takes a listed order that puts b2 first), `train` says so
+/// and names the cell; `left`, which the listed order chains as its own
+/// ascending one, is not named.
+#[test]
+fn train_names_a_cell_whose_own_order_the_joint_rule_changes() {
+    let dir = scratch("learning", "two-cells");
+    let pack = dir.join("two.pack");
+    fs::write(&pack, TWO_CELLS).expect("write the cells");
+    let compiled = dir.join("compiled").display().to_string();
+    let model = dir.join("model").display().to_string();
+    let out = packwright(&["compile", &pack.display().to_string(), "-o", &compiled]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let out = packwright(&[
+        "train",
+        &compiled,
+        "-o",
+        &model,
+        "--epochs",
+        "2",
+        "--dagger-rounds",
+        "0",
+        "--quiet",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let named: Vec<&serde_json::Value> = report["warnings"]
+        .as_array()
+        .expect("warnings")
+        .iter()
+        .filter(|w| w["kind"] == "cell_reads_otherwise")
+        .collect();
+    assert_eq!(named.len(), 1, "{named:?}");
+    assert_eq!(named[0]["cell"], "right");
+    assert_eq!(named[0]["alone"], "descending");
+    assert!(
+        String::from_utf8_lossy(&out.stderr)
+            .contains("cell `right`'s demonstrations alone follow the order descending"),
+        "{}",
+        text(&out)
+    );
+}
+
+const TWO_CELLS: &str = r#"cell left {
+  robot ur10
+  base (0, 0, 0)
+  suction 100 mm
+  pending (0.45, -0.50) to (0.85, -0.10)
+  box tray (0.00, 0.65) size (0.40, 0.30, 0.08)
+  slot g1 (-0.12, 0.58)
+  slot g2 ( 0.00, 0.58)
+  slot g3 ( 0.12, 0.58)
+}
+cell right {
+  robot ur10
+  base (0, 0, 0)
+  suction 100 mm
+  pending (0.45, 0.10) to (0.85, 0.50)
+  box tray (0.00, -0.65) size (0.40, 0.30, 0.08)
+  slot h1 (-0.12, -0.58)
+  slot h2 ( 0.00, -0.58)
+  slot h3 ( 0.12, -0.58)
+}
+product a1 cube 50 mm
+product a2 cube 50 mm
+product a3 cube 50 mm
+product b1 cube 50 mm
+product b2 cube 50 mm
+product b3 cube 50 mm
+inventory la for left {
+  a1 (0.50, -0.20)
+  a2 (0.62, -0.20)
+  a3 (0.74, -0.20)
+}
+inventory rb for right {
+  b1 (0.50, 0.20)
+  b2 (0.62, 0.20)
+  b3 (0.74, 0.20)
+}
+order lo for la {
+  a1 -> g1
+  a2 -> g2
+}
+order ro for rb {
+  b1 -> h1
+  b3 -> h3
+}
+demo left_seen for lo {
+  sequence a1, a2
+}
+demo right_seen for ro {
+  sequence b3, b1
+}
+"#;

@@ -43,6 +43,11 @@ pub struct Lesson {
     /// The expert's rehearsals of the products and slots no chosen
     /// demonstration moved ([`rehearsals`]): motion examples only.
     pub rehearsals: Vec<DemonstrationRecord>,
+    /// With several cells: each cell whose own demonstrations, read
+    /// alone, follow another rule than the one the model takes for all
+    /// (a cell's one demonstration can read as descending alone and fit a
+    /// listed order taught with others), and that rule.
+    pub read_otherwise: Vec<(String, SequenceRule)>,
 }
 
 /// The expert's replays of a lesson's demonstrations.
@@ -150,7 +155,7 @@ impl Lesson {
                 dir.display()
             )));
         }
-        let cells = chosen
+        let cells: Vec<String> = chosen
             .iter()
             .map(|d| d.cell.clone())
             .collect::<BTreeSet<_>>()
@@ -180,6 +185,7 @@ impl Lesson {
         let ordered: Vec<usize> = (0..chosen.len())
             .filter(|k| !any_order.contains(k))
             .collect();
+        let mut read_otherwise = Vec::new();
         let Inferred {
             rule: sequence,
             exceptions,
@@ -208,6 +214,18 @@ impl Lesson {
                 .map(|b| b.name.as_str())
                 .collect();
             let inferred = sequence_rule(&world, &shown, &declared, &directed)?;
+            if cells.len() > 1 {
+                for cell in &cells {
+                    let own: Vec<DemonstrationRecord> =
+                        shown.iter().filter(|d| &d.cell == cell).cloned().collect();
+                    if let Ok(alone) = sequence_rule(&world, &own, &declared, &directed)
+                        && !own.is_empty()
+                        && orders_otherwise(&world, cell, &alone.rule, &inferred.rule)
+                    {
+                        read_otherwise.push((cell.clone(), alone.rule));
+                    }
+                }
+            }
             Inferred {
                 exceptions: inferred.exceptions.iter().map(|&e| ordered[e]).collect(),
                 rule: inferred.rule,
@@ -226,6 +244,7 @@ impl Lesson {
             exceptions,
             any_order,
             rehearsals,
+            read_otherwise,
         })
     }
 
@@ -347,6 +366,20 @@ impl Lesson {
             demos: self.blocks.clone(),
         }
     }
+}
+
+/// Whether rules `a` and `b` order some inventory of `cell` differently
+/// (a listed order taught over several cells can chain one cell's
+/// products as its own rule does).
+fn orders_otherwise(world: &WorldFile, cell: &str, a: &SequenceRule, b: &SequenceRule) -> bool {
+    world
+        .inventories
+        .iter()
+        .filter(|i| i.cell == cell)
+        .any(|i| {
+            let names: Vec<&str> = i.products.iter().map(|p| p.product.as_str()).collect();
+            a.chain(&names) != b.chain(&names)
+        })
 }
 
 /// A decision's graph with more products selected than its demonstration

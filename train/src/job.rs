@@ -77,6 +77,13 @@ pub enum Weakness {
     NoneHeldOut { network: String, samples: usize },
     /// Still improving at the most epochs allowed.
     NotConverged { network: String, epochs: usize },
+    /// A cell taught with others whose own demonstrations, read alone,
+    /// follow another rule than the one the model takes for every cell.
+    CellReadsOtherwise {
+        cell: String,
+        alone: packwright_interface::SequenceRule,
+        taught: packwright_interface::SequenceRule,
+    },
     /// Demonstrations that break the taught sequence rule (their
     /// decisions were left out of the reasoner's examples).
     SequenceExceptions {
@@ -121,6 +128,14 @@ impl std::fmt::Display for Weakness {
             Weakness::NotConverged { network, epochs } => write!(
                 f,
                 "the {network} was still improving after {epochs} epochs; raise --epochs"
+            ),
+            Weakness::CellReadsOtherwise {
+                cell,
+                alone,
+                taught,
+            } => write!(
+                f,
+                "cell `{cell}`'s demonstrations alone follow the order {alone}; taught with the other cells, the model follows one order for all, {taught}: train the cell on its own (`--demos`) to keep its order"
             ),
             Weakness::SequenceExceptions {
                 exceptions,
@@ -254,6 +269,13 @@ pub fn run(
         ],
         config.dagger_rounds,
     );
+    for (cell, alone) in &lesson.read_otherwise {
+        warnings.push(Weakness::CellReadsOtherwise {
+            cell: cell.clone(),
+            alone: alone.clone(),
+            taught: lesson.sequence.clone(),
+        });
+    }
     if let Some(&first) = lesson.exceptions.first() {
         let d = &lesson.chosen[first];
         warnings.insert(
