@@ -802,43 +802,6 @@ fn the_start_pose_over_a_tall_product_is_clear_of_it() {
     wide_packs_without_fallback(258, SuiteKind::Case1N, "01");
 }
 
-/// Beside 106 mm products packed next to its slot
-/// (`tests/cells/tall_neighbours.pack`, a helper's cell): the straight
-/// motion from the approach to above slot g3 collides, the expert swings,
-/// and the learned planner went through its policy's five steps, product
-/// A 18.48 s against the expert's 15.89 (1.16 times). The rollout tries
-/// the swing to the steps' end first: within 10% of the expert's now.
-#[test]
-fn a_learned_motion_beside_tall_products_swings_as_the_expert_does() {
-    let pack = "tests/cells/tall_neighbours.pack";
-    let scenario = "more_5of5/01";
-    let learned = executes_file(pack, scenario);
-    complete_without_fallback(&learned);
-    let out = packwright(&[
-        "execute",
-        pack,
-        "--scenario",
-        scenario,
-        "--planner",
-        "expert",
-        "--json",
-    ]);
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
-    let expert = json(&out);
-    let seconds = |report: &serde_json::Value| {
-        report["products"]
-            .as_array()
-            .and_then(|rows| rows.iter().find(|r| r["product"] == "A"))
-            .and_then(|r| r["execution_s"].as_f64())
-            .expect("product A's row")
-    };
-    let (l, e) = (seconds(&learned), seconds(&expert));
-    assert!(
-        l <= 1.10 * e,
-        "learned {l:.2} s against the expert's {e:.2} s"
-    );
-}
-
 /// Scenario `scenario` of the cell file `pack`, executed with the bundled
 /// model: the package complete, with no fallback.
 fn file_packs_without_fallback(pack: &str, scenario: &str) {

@@ -729,20 +729,6 @@ impl<'a, W: World> Station<'a, W> {
             Err(why @ Failure::WouldCollide { .. }) => why,
             Err(other) => return Err(other),
         };
-        if let Some(route) = self.swing(k, from, to, load) {
-            return Ok(route);
-        }
-        match how {
-            Connect::Straight => Err(straight),
-            Connect::Rrt { seed } => self.search(seed, k, from, to, load),
-        }
-    }
-
-    /// The checked swing from `from` to `to` for sub-goal `k`: the base
-    /// turned alone first with the arm's shape kept (the wrist keeping the
-    /// cup's yaw), then the rest of the motion, or the rest first and the
-    /// base last; the first that is free.
-    pub fn swing(&self, k: usize, from: Joints, to: Joints, load: Load) -> Option<Route> {
         let turn = to[0] - from[0];
         let mut swing_first = from;
         swing_first[0] = to[0];
@@ -750,12 +736,17 @@ impl<'a, W: World> Station<'a, W> {
         let mut swing_last = to;
         swing_last[0] = from[0];
         swing_last[5] -= turn;
-        [swing_first, swing_last].into_iter().find_map(|via| {
-            self.arm
-                .within_limits(&via)
-                .then(|| self.checked(k, from, &[via, to], load).ok())
-                .flatten()
-        })
+        for via in [swing_first, swing_last] {
+            if self.arm.within_limits(&via)
+                && let Ok(route) = self.checked(k, from, &[via, to], load)
+            {
+                return Ok(route);
+            }
+        }
+        match how {
+            Connect::Straight => Err(straight),
+            Connect::Rrt { seed } => self.search(seed, k, from, to, load),
+        }
     }
 
     /// RRT-Connect's search from `from` to `to` (seeded by `seed`, within

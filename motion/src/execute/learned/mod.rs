@@ -289,14 +289,6 @@ impl<W: World> Learned<'_, W> {
                 {
                     return Ok(route);
                 }
-                // A swing to the steps' end (the base turned alone first
-                // or last), as the expert's motions go where the straight
-                // one collides: beside tall products packed next to the
-                // slot, through the steps took a 106 mm product 0.7 s
-                // longer to above its slot than the expert's swing.
-                if let Some(route) = s.swing(0, start, end, load) {
-                    return Ok(route);
-                }
                 // Through the steps instead (passing through them), when
                 // they stay within the limits.
                 if steps.iter().all(|q| s.arm.within_limits(q))
