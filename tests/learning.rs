@@ -339,6 +339,29 @@ fn train_names_a_cell_whose_own_order_the_joint_rule_changes() {
         "{}",
         text(&out)
     );
+    // The same training again writes the same bytes (burn's store wrote
+    // its header's metadata in a hash map's order).
+    let again = dir.join("again").display().to_string();
+    let out = packwright(&[
+        "train",
+        &compiled,
+        "-o",
+        &again,
+        "--epochs",
+        "2",
+        "--dagger-rounds",
+        "0",
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    for file in [
+        "reasoner.safetensors",
+        "subgoal.safetensors",
+        "dynamics.safetensors",
+    ] {
+        let read = |d: &str| fs::read(Path::new(d).join(file)).expect("a model file");
+        assert!(read(&model) == read(&again), "{file} differs");
+    }
 }
 
 const TWO_CELLS: &str = r#"cell left {

@@ -36,7 +36,44 @@ fn save<M: ModuleSnapshot>(m: &M, file: &'static str) -> Result<Vec<u8>, SaveErr
         reason: e.to_string(),
     };
     m.save_into(&mut store).map_err(|e| fail(&e))?;
-    store.get_bytes().map_err(|e| fail(&e))
+    let bytes = store.get_bytes().map_err(|e| fail(&e))?;
+    canonical(&bytes).ok_or_else(|| fail(&"its header is not a safetensors header"))
+}
+
+/// A safetensors file with its header's keys sorted (tensors and
+/// metadata), padded with spaces to 8 bytes as `safetensors` writes it:
+/// burn's store writes its metadata in a hash map's order, so that two
+/// identical trainings gave files differing in those bytes alone. The
+/// tensors' bytes and offsets (from the end of the header) are kept.
+fn canonical(bytes: &[u8]) -> Option<Vec<u8>> {
+    let n = u64::from_le_bytes(bytes.get(..8)?.try_into().ok()?);
+    let end = 8usize.checked_add(usize::try_from(n).ok()?)?;
+    let header: std::collections::BTreeMap<String, serde_json::Value> =
+        serde_json::from_slice(bytes.get(8..end)?).ok()?;
+    let mut json = serde_json::to_vec(&sorted(serde_json::to_value(header).ok()?)).ok()?;
+    while json.len() % 8 != 0 {
+        json.push(b' ');
+    }
+    let mut out = Vec::with_capacity(8 + json.len() + bytes.len() - end);
+    out.extend_from_slice(&(json.len() as u64).to_le_bytes());
+    out.extend_from_slice(&json);
+    out.extend_from_slice(bytes.get(end..)?);
+    Some(out)
+}
+
+/// `v` with every object's keys in sorted order.
+fn sorted(v: serde_json::Value) -> serde_json::Value {
+    match v {
+        serde_json::Value::Object(map) => {
+            let sorted: std::collections::BTreeMap<String, serde_json::Value> =
+                map.into_iter().map(|(k, v)| (k, sorted(v))).collect();
+            serde_json::Value::Object(sorted.into_iter().collect())
+        }
+        serde_json::Value::Array(items) => {
+            serde_json::Value::Array(items.into_iter().map(sorted).collect())
+        }
+        other => other,
+    }
 }
 
 impl Trained {
