@@ -218,8 +218,8 @@ impl Lesson {
                 for cell in &cells {
                     let own: Vec<DemonstrationRecord> =
                         shown.iter().filter(|d| &d.cell == cell).cloned().collect();
-                    if let Ok(alone) = sequence_rule(&world, &own, &declared, &directed)
-                        && !own.is_empty()
+                    if !own.is_empty()
+                        && let Ok(alone) = sequence_rule(&world, &own, &declared, &directed)
                         && orders_otherwise(&world, cell, &alone.rule, &inferred.rule)
                     {
                         read_otherwise.push((cell.clone(), alone.rule));

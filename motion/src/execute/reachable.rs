@@ -299,10 +299,17 @@ impl Reachability {
             let reached = match k {
                 2 => raised
                     .iter()
-                    .find_map(|z| {
-                        let free = self.step(goal, &[*z], Some(&above), load);
-                        release.drop = expert::RELEASE_GAP + (z - goal.tip[2]);
-                        (!free.is_empty()).then_some(free)
+                    .find_map(|&z| {
+                        let free = self.step(goal, &[z], Some(&above), load);
+                        (!free.is_empty()).then_some((z, free))
+                    })
+                    .map(|(z, free)| {
+                        let raise = z - goal.tip[2];
+                        release.drop = expert::RELEASE_GAP + raise;
+                        if raise > 1e-9 {
+                            release.lower = self.met_at(goal, &above, load);
+                        }
+                        free
                     })
                     .unwrap_or_default(),
                 _ => self.step(goal, &carried(goal), None, load),
@@ -313,9 +320,6 @@ impl Reachability {
                     subgoal: k + 1,
                     tip: goal.tip,
                 });
-            }
-            if k == 2 && release.drop > expert::RELEASE_GAP + 1e-9 {
-                release.lower = self.met_at(goal, &above, load);
             }
             above = reached;
         }

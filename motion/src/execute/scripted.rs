@@ -328,7 +328,7 @@ impl<W: World> Scripted<'_, W> {
             // No free way down onto the product or up from it with the arm's
             // shape nearest where it is, and nothing sent yet: the stage
             // again from the contact's shape ([`Station::grip`]).
-            Err(why) if gripping_blocked(&why) && self.station.clock.steps == 0 => {
+            Err(why) if shape_blocked(&why, 2) && self.station.clock.steps == 0 => {
                 self.rewind(marks);
                 let plan = self
                     .grip_stage(from, &picking, yaw, picking_loads, &lifting)
@@ -357,7 +357,7 @@ impl<W: World> Scripted<'_, W> {
             // No free way down into the slot from the point above it in
             // the arm's shape nearest where it is: the point above the
             // slot in the release's shape ([`Station::release_shape`]).
-            Err(why) if releasing_blocked(&why) => self
+            Err(why) if shape_blocked(&why, 3) => self
                 .release_stage(from, &placing, [carrying; 3])
                 .ok_or(why)?,
             Err(why) => return Err(why),
@@ -385,28 +385,17 @@ impl<W: World> Scripted<'_, W> {
     }
 }
 
-/// Whether a picking stage's failure `why` can come from the arm's shape
-/// at the contact (no free way down onto the product or up from it)
-/// rather than from the budget or the smoother.
-fn gripping_blocked(why: &Failure) -> bool {
-    matches!(
-        why,
-        Failure::Unreachable { subgoal: 2 | 3, .. }
-            | Failure::NoPath { subgoal: 2 | 3 }
-            | Failure::WouldCollide { subgoal: 2 | 3, .. }
-    )
-}
-
-/// Whether a placing stage's failure `why` can come from the arm's shape
-/// above the slot (no free way down to the release) rather than from the
-/// budget or the smoother.
-fn releasing_blocked(why: &Failure) -> bool {
-    matches!(
-        why,
-        Failure::Unreachable { subgoal: 3, .. }
-            | Failure::NoPath { subgoal: 3 }
-            | Failure::WouldCollide { subgoal: 3, .. }
-    )
+/// Whether a stage's failure `why`, at sub-goal `first` or after it, can
+/// come from the arm's shape there rather than from the budget or the
+/// smoother: no free way down onto a product or up from it (picking, from
+/// sub-goal 2), or down to the release (placing, sub-goal 3).
+fn shape_blocked(why: &Failure, first: usize) -> bool {
+    match why {
+        Failure::Unreachable { subgoal, .. }
+        | Failure::NoPath { subgoal }
+        | Failure::WouldCollide { subgoal, .. } => (first..=3).contains(subgoal),
+        _ => false,
+    }
 }
 
 /// The assignment's indices in the order the products are handled: the

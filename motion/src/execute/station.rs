@@ -1111,14 +1111,6 @@ impl<'a, W: World> Station<'a, W> {
         }
     }
 
-    /// Fills in `row` (product `p` for slot `s`) after the robot handled
-    /// it: the planning and motion time since [`restart_clock`] and the
-    /// product's distance from its goal now. A product handled again (let
-    /// go off its slot, then picked from where it fell) keeps its first
-    /// turn, and its times are the sum of both: the rows add up to the
-    /// package's time.
-    ///
-    /// [`restart_clock`]: Station::restart_clock
     /// Whether product `p` is seen within [`UNMOVED`] of `stood` (where
     /// it stood when its handling began).
     pub fn unmoved(&self, p: usize, stood: Option<[f64; 3]>) -> bool {
@@ -1129,6 +1121,14 @@ impl<'a, W: World> Station<'a, W> {
         }
     }
 
+    /// Fills in `row` (product `p` for slot `s`) after the robot handled
+    /// it: the planning and motion time since [`restart_clock`] and the
+    /// product's distance from its goal now. A product handled again (let
+    /// go off its slot, then picked from where it fell) keeps its first
+    /// turn, and its times are the sum of both: the rows add up to the
+    /// package's time.
+    ///
+    /// [`restart_clock`]: Station::restart_clock
     pub fn measure(&mut self, row: &mut ProductReport, p: usize, s: usize) {
         self.handled += 1;
         row.turn.get_or_insert(self.handled);
