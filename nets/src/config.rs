@@ -4,6 +4,7 @@
 use crate::taught::TaughtQueries;
 use packwright_interface::SequenceRule;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// The architecture: everything needed to rebuild the modules before their
 /// weights are loaded. Saved as `config.json` beside the weights.
@@ -111,8 +112,21 @@ pub struct Task {
     /// The sequence rule the demonstrations follow (inferred by `train`);
     /// the reasoner's chain order, and what `eval` judges it against.
     pub sequence: SequenceRule,
+    /// Taught with several cells: the cells whose own demonstrations
+    /// follow another rule, which the model keeps for them
+    /// ([`Task::rule_for`]). Absent in models taught one rule.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub cell_rules: BTreeMap<String, SequenceRule>,
     /// The demonstration blocks taught.
     pub demos: Vec<String>,
+}
+
+impl Task {
+    /// The rule the model follows in `cell`: the cell's own, else the one
+    /// for every cell.
+    pub fn rule_for(&self, cell: &str) -> &SequenceRule {
+        self.cell_rules.get(cell).unwrap_or(&self.sequence)
+    }
 }
 
 /// `config.json`: enough to rebuild the networks and to know what they do.

@@ -73,8 +73,11 @@ pub fn choose_planner(
 /// What [`follow_cell_rule`] did.
 #[derive(Debug, Clone, PartialEq)]
 pub enum CellRule {
-    /// The model was taught the cell: its rule is kept.
-    Taught,
+    /// The model was taught the cell: it follows the rule it was taught
+    /// there (the cell's own where it kept one, [`Task::rule_for`]).
+    ///
+    /// [`Task::rule_for`]: packwright_nets::Task::rule_for
+    Taught(SequenceRule),
     /// The compilation holds no demonstration of the cell that orders
     /// it (none, or only `sequence random` ones): the model's rule is
     /// kept.
@@ -91,10 +94,12 @@ pub enum CellRule {
 /// Makes `nets`, on `cell` of `compiled` which it was not taught, follow
 /// the sequence rule that the compilation's demonstrations of that cell
 /// show ([`crate::teach::cell_rule`]), so that a model serving many cells
-/// packs each in the order its own file teaches.
+/// packs each in the order its own file teaches; on a cell it was taught,
+/// the rule it was taught there.
 pub fn follow_cell_rule(nets: &mut Networks, compiled: &Compiled, cell: &str) -> CellRule {
     if taught(nets, cell) {
-        return CellRule::Taught;
+        nets.task.sequence = nets.task.rule_for(cell).clone();
+        return CellRule::Taught(nets.task.sequence.clone());
     }
     match crate::teach::cell_rule(compiled, cell) {
         Ok(Some(inferred)) if inferred.rule != nets.task.sequence => {
@@ -125,4 +130,57 @@ pub fn baseline_rule(nets: Option<&Networks>, compiled: &Compiled, cell: &str) -
 /// Whether `nets` was taught demonstrations in `cell`.
 pub fn taught(nets: &Networks, cell: &str) -> bool {
     nets.task.cells.iter().any(|c| c == cell)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use packwright_compiler::{MemoryLoader, check};
+    use std::path::PathBuf;
+
+    /// On a cell it was taught, a model follows the rule it was taught
+    /// there: the cell's own where it kept one, else the one for every
+    /// cell; and the expert and RRT-Connect beside it follow the same.
+    #[test]
+    fn a_taught_cell_is_packed_in_the_rule_taught_there() {
+        let text = "cell left {
+  robot ur10
+  base (0, 0, 0)
+  suction 100 mm
+  pending (0.45, -0.50) to (0.85, -0.10)
+  box tray (0.00, 0.65) size (0.40, 0.30, 0.08)
+  slot g1 (-0.12, 0.58)
+}
+product a1 cube 50 mm
+";
+        let loader = MemoryLoader::new().with("c.pack", text.to_owned());
+        let compiled = check(
+            &loader,
+            &[PathBuf::from("c.pack")],
+            &crate::reach::RobotWorkspace::new(),
+        )
+        .unwrap_or_else(|failed| panic!("{}", failed.render()));
+        let Ok(mut nets) = default_model() else {
+            panic!("the bundled model loads");
+        };
+        nets.task.cells = vec!["left".into(), "right".into()];
+        nets.task.sequence = SequenceRule::Ascending;
+        nets.task.cell_rules = [("right".to_owned(), SequenceRule::Descending)].into();
+        let mut right = nets.clone();
+        assert_eq!(
+            follow_cell_rule(&mut right, &compiled, "right"),
+            CellRule::Taught(SequenceRule::Descending)
+        );
+        assert_eq!(right.task.sequence, SequenceRule::Descending);
+        assert_eq!(
+            baseline_rule(Some(&right), &compiled, "right"),
+            SequenceRule::Descending
+        );
+        let mut left = nets.clone();
+        assert_eq!(
+            follow_cell_rule(&mut left, &compiled, "left"),
+            CellRule::Taught(SequenceRule::Ascending)
+        );
+        assert_eq!(left.task.sequence, SequenceRule::Ascending);
+    }
 }

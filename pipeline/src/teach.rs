@@ -43,10 +43,14 @@ pub struct Lesson {
     /// The expert's rehearsals of the products and slots no chosen
     /// demonstration moved ([`rehearsals`]): motion examples only.
     pub rehearsals: Vec<DemonstrationRecord>,
-    /// With several cells: each cell whose own demonstrations, read
-    /// alone, follow another rule than the one the model takes for all
-    /// (a cell's one demonstration can read as descending alone and fit a
-    /// listed order taught with others), and that rule.
+    /// With several cells: the cells that keep the rule their own
+    /// demonstrations follow, read alone, where it orders one of their
+    /// inventories otherwise than [`Lesson::sequence`] (see `own_rule`).
+    pub cell_rules: BTreeMap<String, SequenceRule>,
+    /// The cells whose own demonstrations, read alone, follow another
+    /// rule than the one they are taught ([`Lesson::rule_for`]): they
+    /// share products with other cells, whose demonstrations order them
+    /// too, and their own break no rule taught with those; with that rule.
     pub read_otherwise: Vec<(String, SequenceRule)>,
 }
 
@@ -186,6 +190,7 @@ impl Lesson {
             .filter(|k| !any_order.contains(k))
             .collect();
         let mut read_otherwise = Vec::new();
+        let mut cell_rules = BTreeMap::new();
         let Inferred {
             rule: sequence,
             exceptions,
@@ -214,25 +219,40 @@ impl Lesson {
                 .map(|b| b.name.as_str())
                 .collect();
             let inferred = sequence_rule(&world, &shown, &declared, &directed)?;
+            // Indices into `shown`.
+            let mut exceptions: BTreeSet<usize> = inferred.exceptions.iter().copied().collect();
             if cells.len() > 1 {
                 for cell in &cells {
+                    let mine: Vec<usize> = (0..shown.len())
+                        .filter(|&i| &shown[i].cell == cell)
+                        .collect();
                     let own: Vec<DemonstrationRecord> =
-                        shown.iter().filter(|d| &d.cell == cell).cloned().collect();
-                    if !own.is_empty()
-                        && let Ok(alone) = sequence_rule(&world, &own, &declared, &directed)
-                        && orders_otherwise(&world, cell, &alone.rule, &inferred.rule)
-                    {
+                        mine.iter().map(|&i| shown[i].clone()).collect();
+                    let Some(alone) = (!own.is_empty())
+                        .then(|| sequence_rule(&world, &own, &declared, &directed).ok())
+                        .flatten()
+                        .filter(|a| orders_otherwise(&world, cell, &a.rule, &inferred.rule))
+                    else {
+                        continue;
+                    };
+                    let broken = mine.iter().any(|i| exceptions.contains(i));
+                    if own_rule(&world, &cells, cell, broken) {
+                        exceptions.retain(|i| !mine.contains(i));
+                        exceptions.extend(alone.exceptions.iter().map(|&e| mine[e]));
+                        cell_rules.insert(cell.clone(), alone.rule);
+                    } else {
                         read_otherwise.push((cell.clone(), alone.rule));
                     }
                 }
             }
             Inferred {
-                exceptions: inferred.exceptions.iter().map(|&e| ordered[e]).collect(),
+                exceptions: exceptions.iter().map(|&e| ordered[e]).collect(),
                 rule: inferred.rule,
             }
         };
         for &k in &any_order {
-            follow_rule(&world, &sequence, &mut chosen[k]);
+            let rule = cell_rules.get(&chosen[k].cell).unwrap_or(&sequence);
+            follow_rule(&world, rule, &mut chosen[k]);
         }
         let rehearsals = rehearsals(&world, &chosen);
         Ok(Lesson {
@@ -244,8 +264,15 @@ impl Lesson {
             exceptions,
             any_order,
             rehearsals,
+            cell_rules,
             read_otherwise,
         })
+    }
+
+    /// The rule the demonstrations of `cell` are taught in: its own
+    /// ([`Lesson::cell_rules`]), else the one for every cell.
+    pub fn rule_for(&self, cell: &str) -> &SequenceRule {
+        self.cell_rules.get(cell).unwrap_or(&self.sequence)
     }
 
     /// Replays the chosen demonstrations and the rehearsals with the
@@ -308,7 +335,8 @@ impl Lesson {
                 .take(demo.sequence.len())
                 .map(|&(p, _)| p)
                 .collect();
-            let decisions = demonstrated_decisions(&ep.task, &seen, &sequence, &self.sequence);
+            let rule = self.rule_for(&demo.cell);
+            let decisions = demonstrated_decisions(&ep.task, &seen, &sequence, rule);
             for (graph, choice) in decisions.into_iter().filter(|_| taught) {
                 let example = |graph: Graph| GraphExample {
                     target: choice.node.unwrap_or(graph.nodes.len()),
@@ -363,9 +391,34 @@ impl Lesson {
         Task {
             cells: self.cells.clone(),
             sequence: self.sequence.clone(),
+            cell_rules: self.cell_rules.clone(),
             demos: self.blocks.clone(),
         }
     }
+}
+
+/// Whether `cell`, whose own demonstrations read alone follow another
+/// rule than the one inferred over every taught cell, keeps its own: when
+/// some of them break that rule (`broken`), or when none of its products
+/// stands in another taught cell's inventory, so that the other cells'
+/// demonstrations say nothing of their order. Where they share products,
+/// the joint rule orders them from more demonstrations than the cell's
+/// own and is kept.
+fn own_rule(world: &WorldFile, cells: &[String], cell: &str, broken: bool) -> bool {
+    let products_of = |c: &str| -> BTreeSet<&str> {
+        world
+            .inventories
+            .iter()
+            .filter(|i| i.cell == c)
+            .flat_map(|i| i.products.iter().map(|p| p.product.as_str()))
+            .collect()
+    };
+    let mine = products_of(cell);
+    broken
+        || cells
+            .iter()
+            .filter(|c| c.as_str() != cell)
+            .all(|c| products_of(c).is_disjoint(&mine))
 }
 
 /// Whether rules `a` and `b` order some inventory of `cell` differently
@@ -761,6 +814,46 @@ mod tests {
         assert_eq!(taught(SequenceRule::Descending), ["d", "c", "a"]);
         let listed = SequenceRule::Listed(["d", "a"].map(String::from).to_vec());
         assert_eq!(taught(listed), ["d", "a", "c"]);
+    }
+
+    /// A cell keeps its own rule where its demonstrations break the joint
+    /// one, or where no other taught cell stocks its products; where
+    /// cells share products the joint rule, taught from more
+    /// demonstrations of them, is kept.
+    #[test]
+    fn a_cell_keeps_its_own_rule_unless_it_shares_products() {
+        use packwright_compiler::artifact::{At, InventoryRecord};
+        let inventory = |name: &str, cell: &str, products: &[&str]| InventoryRecord {
+            name: name.into(),
+            cell: cell.into(),
+            products: products
+                .iter()
+                .map(|&p| At {
+                    product: p.into(),
+                    at: [0.0; 3],
+                })
+                .collect(),
+        };
+        let world = |right: &[&str]| WorldFile {
+            schema: "test".into(),
+            version: 0,
+            cells: Vec::new(),
+            products: Vec::new(),
+            inventories: vec![
+                inventory("la", "left", &["a1", "a2", "a3"]),
+                inventory("rb", "right", right),
+            ],
+            orders: Vec::new(),
+        };
+        let cells = ["left", "right"].map(String::from);
+        let apart = world(&["b1", "b2", "b3"]);
+        assert!(own_rule(&apart, &cells, "right", false));
+        assert!(own_rule(&apart, &cells, "left", false));
+        let shared = world(&["b1", "a2", "b3"]);
+        assert!(!own_rule(&shared, &cells, "right", false));
+        assert!(own_rule(&shared, &cells, "right", true));
+        // A cell taught alone has no other cell to share with.
+        assert!(own_rule(&shared, &cells[..1], "left", false));
     }
 
     /// The products after the chosen one are left out, so that it is last

@@ -90,7 +90,8 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
     }
     let mut rows = Vec::new();
     // The order each cell's own demonstrations teach a model that was not
-    // taught the cell (`follow_cell_rule`).
+    // taught the cell, or the one the model was taught there
+    // (`follow_cell_rule`).
     let mut cell_rules = std::collections::BTreeMap::new();
     let mut all_results = Vec::new();
     // Loaded once. A model that cannot be used (files missing, another
@@ -109,7 +110,9 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
             // Read once per cell (and said once), applied to every suite
             // of the cell.
             match cell_rules.get(&cell) {
-                Some(CellRule::Followed(rule)) => n.task.sequence = rule.clone(),
+                Some(CellRule::Followed(rule) | CellRule::Taught(rule)) => {
+                    n.task.sequence = rule.clone()
+                }
                 Some(_) => {}
                 None => {
                     let rule = follow_cell_rule(n, &compiled, &cell);

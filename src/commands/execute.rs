@@ -85,14 +85,14 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
         anyhow::bail!("--dry-run needs a real robot: --robot ur10://HOST");
     }
     let (kind, mut model) = choose_planner(args.planner, args.model.as_deref())?;
-    if let Some(nets) = &mut model
-        && !taught(nets, &ep.task.cell.name)
-    {
-        errln!(
-            "note: the model was not taught cell `{}` ({}): it answers from this cell's geometry (see README, \"Learning\")",
-            ep.task.cell.name,
-            taught_cells(&nets.task.cells)
-        );
+    if let Some(nets) = &mut model {
+        if !taught(nets, &ep.task.cell.name) {
+            errln!(
+                "note: the model was not taught cell `{}` ({}): it answers from this cell's geometry (see README, \"Learning\")",
+                ep.task.cell.name,
+                taught_cells(&nets.task.cells)
+            );
+        }
         let rule = follow_cell_rule(nets, &compiled, &ep.task.cell.name);
         note_cell_rule(&ep.task.cell.name, &rule, &nets.task.sequence);
     }
@@ -339,7 +339,7 @@ fn print_report(name: &str, report: &Report, clock: &str) {
 /// that cell's own demonstrations decided it ([`follow_cell_rule`]).
 pub fn note_cell_rule(cell: &str, what: &CellRule, model_rule: &SequenceRule) {
     match what {
-        CellRule::Taught => {}
+        CellRule::Taught(_) => {}
         CellRule::Undemonstrated => errln!(
             "note: no demonstration in the files orders cell `{cell}`: the learned planner packs it in the model's own order, {model_rule}"
         ),

@@ -128,6 +128,9 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
             report.training_s
         );
         outln!("  sequence rule taught: {}", report.sequence);
+        for (cell, rule) in &report.cell_rules {
+            outln!("    in cell `{cell}`: {rule} (its own demonstrations' order)");
+        }
         if report.any_order > 0 {
             outln!(
                 "  any order: {} of {} demonstrations come from blocks with `sequence random`; taught in the rule's order{}",

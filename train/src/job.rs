@@ -17,6 +17,9 @@ pub struct TrainingReport {
     pub cells: Vec<String>,
     /// The sequence rule the demonstrations follow (the reasoner's chain).
     pub sequence: packwright_interface::SequenceRule,
+    /// Taught with several cells: the cells that keep the rule their own
+    /// demonstrations follow, and that rule.
+    pub cell_rules: std::collections::BTreeMap<String, packwright_interface::SequenceRule>,
     pub demos: Vec<String>,
     pub demonstrations: usize,
     pub replayed: usize,
@@ -78,7 +81,9 @@ pub enum Weakness {
     /// Still improving at the most epochs allowed.
     NotConverged { network: String, epochs: usize },
     /// A cell taught with others whose own demonstrations, read alone,
-    /// follow another rule than the one the model takes for every cell.
+    /// follow another rule than the one the model takes for it: they
+    /// share products with the other cells, whose demonstrations order
+    /// them too, so the joint rule is kept.
     CellReadsOtherwise {
         cell: String,
         alone: packwright_interface::SequenceRule,
@@ -135,7 +140,7 @@ impl std::fmt::Display for Weakness {
                 taught,
             } => write!(
                 f,
-                "cell `{cell}`'s demonstrations alone follow the order {alone}; taught with the other cells, the model follows one order for all, {taught}: train the cell on its own (`--demos`) to keep its order"
+                "cell `{cell}`'s demonstrations alone follow the order {alone}; it shares products with the other cells taught, whose demonstrations order them too, so the model follows the order taught over all of them there, {taught}: train the cell on its own (`--demos`) to keep its order"
             ),
             Weakness::SequenceExceptions {
                 exceptions,
@@ -292,6 +297,7 @@ pub fn run(
         schema: "packwright.metrics/2",
         cells: lesson.cells.clone(),
         sequence: lesson.sequence.clone(),
+        cell_rules: lesson.cell_rules.clone(),
         demos: lesson.blocks.clone(),
         demonstrations: lesson.chosen.len(),
         replayed: lesson.chosen.len() - failures.len(),
