@@ -216,6 +216,32 @@ fn a_model_taught_one_demonstration_moves_the_products_it_never_saw() {
     }
 }
 
+/// One hand-written demonstration, taught in reverse inventory order
+/// (tests/cells/flat_beside_crate.pack, helper I's probe cell). The model
+/// taught it was taught the arm's one shape: from above the crate, its
+/// steps to the hover over a flat tray behind the robot kept that shape,
+/// and the straight motion there put the upper arm into the crate at
+/// every height; its steps from the arm's other shapes fell short, so
+/// RRT-Connect took the stage over (both scenarios). The end its steps
+/// reach is now also tried in the arm's other shapes, as the expert's
+/// hover is in the elbow's other one: no fallback.
+#[test]
+fn a_model_taught_one_shape_hovers_in_another_where_its_own_meets_a_crate() {
+    let dir = scratch("generalisation", "flat_beside_crate");
+    let pack = "tests/cells/flat_beside_crate.pack";
+    let (model, out) = compiled_and_trained(pack, &dir, 2);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let out = packwright(&[
+        "eval", pack, "--model", &model, "--suite", "c1_6of7", "--limit", "2", "--quiet", "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let eval = json(&out);
+    let row = &eval["rows"][0];
+    for rate in ["reasoner_sr", "sr", "sr_no_fallback"] {
+        assert_eq!(row[rate]["rate"].as_f64(), Some(1.0), "{rate}: {row}");
+    }
+}
+
 /// Found by a probe of 100 cells no one had looked at (seeds 3000-3099,
 /// the bundled model, which was not taught them): in gen_3078 a learned
 /// release whose motion collides is handed to RRT-Connect at the expert's

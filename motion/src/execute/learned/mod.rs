@@ -378,6 +378,35 @@ impl<W: World> Learned<'_, W> {
             })
             .collect();
         ends.sort_by(|a, b| joint_distance(&a.1, &start).total_cmp(&joint_distance(&b.1, &start)));
+        // Then the end the policy's steps reach in the start's own shape,
+        // in each other shape (the same flange pose): where the policy
+        // was taught one shape only (a model taught one demonstration),
+        // its steps from another shape's joints fall short, and the
+        // expert's hover over a flat product beside a crate is in the
+        // elbow's other shape.
+        if matches!(shapes, Shapes::Others)
+            && let Ok(steps) =
+                policy_steps_near(MORE_STEPS, arm, base, suction, start, goal, tolerance, act)
+            && let Some(&last) = steps.last()
+            && let Some(reached) = arm.into_limits(&held_at_limits(arm, &start, last), &start)
+        {
+            let pose = arm.flange_pose(base, &reached);
+            let mut more: Vec<(Joints, Joints)> = arm
+                .ur_ik_branches(base, &pose, &reached)
+                .into_iter()
+                .enumerate()
+                .filter(|&(b, _)| b != own)
+                .filter_map(|(_, end)| end)
+                .map(|end| with_room(arm, &start, end))
+                .filter(|end| s.checker.check(end, load.held, load.ignore).is_none())
+                .filter(|end| ends.iter().all(|(_, e)| e != end))
+                .map(|end| (end, end))
+                .collect();
+            more.sort_by(|a, b| {
+                joint_distance(&a.1, &start).total_cmp(&joint_distance(&b.1, &start))
+            });
+            ends.extend(more);
+        }
         ends.into_iter().find_map(|(from, end)| {
             // Wrist 1 either way round: turning it the shorter way can
             // fold wrist 2 into the forearm as the wrist flips.
