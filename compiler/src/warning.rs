@@ -82,6 +82,25 @@ pub enum Warning {
         /// What stops it lower, where the robot can tell.
         lower: Option<Lower>,
     },
+    /// A cell's demonstrations follow no one sequence rule: no order
+    /// (ascending, descending or one priority list) explains enough of
+    /// them, and `train` refuses them. The compiler does not infer rules:
+    /// `check` and `compile` ask `packwright-pipeline`'s inference
+    /// (`teach::rule_warnings`) and report its answer here.
+    NoSequenceRule {
+        /// The first demonstration block that breaks the best rule.
+        at: Loc,
+        cell: String,
+        /// The best rule, for people.
+        best: String,
+        /// How many of the cell's demonstrations it explains.
+        agree: usize,
+        demonstrations: usize,
+        block: String,
+        /// That block's first breaking demonstration's products, in the
+        /// order handled.
+        sequence: Vec<String>,
+    },
 }
 
 /// The room (m) the motion planner keeps round a held product
@@ -159,6 +178,16 @@ impl fmt::Display for Warning {
                 f,
                 "product `{product}` is let go {drop_mm:.0} mm above the floor of box `{in_box}` in slot `{slot}`: the arm cannot lower it further"
             ),
+            Warning::NoSequenceRule {
+                cell,
+                best,
+                agree,
+                demonstrations,
+                ..
+            } => write!(
+                f,
+                "the demonstrations of cell `{cell}` follow no one sequence rule: the best, {best}, explains {agree} of {demonstrations}"
+            ),
         }
     }
 }
@@ -171,6 +200,7 @@ impl Warning {
             Warning::TooClose { .. } => "W002",
             Warning::DrawnPickBlocked { .. } => "W003",
             Warning::DroppedHigh { .. } => "W004",
+            Warning::NoSequenceRule { .. } => "W005",
         }
     }
 
@@ -180,7 +210,8 @@ impl Warning {
             Warning::PickBlocked { at, .. }
             | Warning::TooClose { at, .. }
             | Warning::DrawnPickBlocked { at, .. }
-            | Warning::DroppedHigh { at, .. } => *at,
+            | Warning::DroppedHigh { at, .. }
+            | Warning::NoSequenceRule { at, .. } => *at,
         }
     }
 
@@ -196,6 +227,9 @@ impl Warning {
                 2.0 * jitter_mm
             ),
             Warning::DroppedHigh { drop_mm, .. } => format!("drops it {drop_mm:.0} mm"),
+            Warning::NoSequenceRule { sequence, .. } => {
+                format!("handles {} in another order", sequence.join(", "))
+            }
         }
     }
 
@@ -219,7 +253,9 @@ impl Warning {
                 *product_at,
                 format!("`{product}` stands {height_mm:.0} mm tall on a {side_mm:.0} mm side"),
             )],
-            Warning::PickBlocked { .. } | Warning::TooClose { .. } => Vec::new(),
+            Warning::PickBlocked { .. }
+            | Warning::TooClose { .. }
+            | Warning::NoSequenceRule { .. } => Vec::new(),
         }
     }
 
@@ -272,6 +308,7 @@ impl Warning {
                     "dropped more than twice its width, a product over twice as tall as it is wide can land tilted and fall over, with every planner; {fix}"
                 )
             }
+            Warning::NoSequenceRule { .. } => "a model learns one order from demonstrations that mostly agree, and `train` refuses these taught on their own (exit 2): make this block's order agree with the others (or write `sequence random` where any order is right), or train on the blocks that agree with `train --demos`".to_owned(),
         }
     }
 }

@@ -47,9 +47,9 @@ pub enum PipelineError {
     Model { what: String, why: ModelError },
     /// Demonstrations that follow no one sequence rule.
     #[error(
-        "the demonstrations follow no one sequence rule: {detail}. A model learns one rule (ascending, descending or a listed priority) from demonstrations that mostly agree: choose blocks that do with --demos (blocks with `sequence random` show that any order is right and are left out of this)"
+        "the demonstrations follow no one sequence rule: {0}. A model learns one rule (ascending, descending or a listed priority) from demonstrations that mostly agree: choose blocks that do with --demos (blocks with `sequence random` show that any order is right and are left out of this)"
     )]
-    ContradictorySequence { detail: String },
+    ContradictorySequence(Box<Contradiction>),
     #[error("no {what} `{name}`; {known}")]
     NoSuch {
         what: &'static str,
@@ -154,3 +154,31 @@ pub enum ArtifactProblem {
 }
 
 pub type Result<T, E = PipelineError> = std::result::Result<T, E>;
+
+/// Why demonstrations follow no one sequence rule: the rule that explains
+/// the most of them, and the first that breaks it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Contradiction {
+    pub best: packwright_interface::SequenceRule,
+    pub agree: usize,
+    pub demonstrations: usize,
+    /// The first breaking demonstration: its index among those asked
+    /// about, its block and its products in the order handled.
+    pub first: Option<(usize, String, Vec<String>)>,
+}
+
+impl std::fmt::Display for Contradiction {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if let Some((k, block, sequence)) = &self.first {
+            write!(
+                f,
+                "the best rule, {}, explains {} of {} demonstrations (block `{block}`, demonstration {k}, handles {} in another order)",
+                self.best,
+                self.agree,
+                self.demonstrations,
+                sequence.join(", ")
+            )?;
+        }
+        Ok(())
+    }
+}

@@ -135,52 +135,34 @@ pub fn taught(nets: &Networks, cell: &str) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use packwright_compiler::{MemoryLoader, check};
-    use std::path::PathBuf;
 
     /// On a cell it was taught, a model follows the rule it was taught
     /// there: the cell's own where it kept one, else the one for every
     /// cell; and the expert and RRT-Connect beside it follow the same.
     #[test]
     fn a_taught_cell_is_packed_in_the_rule_taught_there() {
-        let text = "cell left {
-  robot ur10
-  base (0, 0, 0)
-  suction 100 mm
-  pending (0.45, -0.50) to (0.85, -0.10)
-  box tray (0.00, 0.65) size (0.40, 0.30, 0.08)
-  slot g1 (-0.12, 0.58)
-}
-product a1 cube 50 mm
-";
-        let loader = MemoryLoader::new().with("c.pack", text.to_owned());
-        let compiled = check(
-            &loader,
-            &[PathBuf::from("c.pack")],
-            &crate::reach::RobotWorkspace::new(),
-        )
-        .unwrap_or_else(|failed| panic!("{}", failed.render()));
+        let compiled = crate::teach::tests::rule_cell("");
         let Ok(mut nets) = default_model() else {
             panic!("the bundled model loads");
         };
-        nets.task.cells = vec!["left".into(), "right".into()];
+        nets.task.cells = vec!["c".into(), "d".into()];
         nets.task.sequence = SequenceRule::Ascending;
-        nets.task.cell_rules = [("right".to_owned(), SequenceRule::Descending)].into();
-        let mut right = nets.clone();
+        nets.task.cell_rules = [("c".to_owned(), SequenceRule::Descending)].into();
+        let mut own = nets.clone();
         assert_eq!(
-            follow_cell_rule(&mut right, &compiled, "right"),
+            follow_cell_rule(&mut own, &compiled, "c"),
             CellRule::Taught(SequenceRule::Descending)
         );
-        assert_eq!(right.task.sequence, SequenceRule::Descending);
+        assert_eq!(own.task.sequence, SequenceRule::Descending);
         assert_eq!(
-            baseline_rule(Some(&right), &compiled, "right"),
+            baseline_rule(Some(&own), &compiled, "c"),
             SequenceRule::Descending
         );
-        let mut left = nets.clone();
+        let mut joint = nets.clone();
         assert_eq!(
-            follow_cell_rule(&mut left, &compiled, "left"),
+            follow_cell_rule(&mut joint, &compiled, "d"),
             CellRule::Taught(SequenceRule::Ascending)
         );
-        assert_eq!(left.task.sequence, SequenceRule::Ascending);
+        assert_eq!(joint.task.sequence, SequenceRule::Ascending);
     }
 }

@@ -6,11 +6,11 @@
 
 use crate::artifacts::CompiledDir;
 use crate::episode::{Episode, demonstration_episode};
-use crate::error::{PipelineError, Result};
+use crate::error::{Contradiction, PipelineError, Result};
 use crate::rehearse::rehearsals;
 use crate::replay::{motion_examples, replay_all};
 use packwright_compiler::artifact::{DemonstrationRecord, WorldFile};
-use packwright_compiler::{Compiled, emit};
+use packwright_compiler::{Compiled, Warning, emit};
 use packwright_interface::record::MotionLog;
 use packwright_interface::{Graph, SequenceRule, world::Seen};
 use packwright_motion::execute::demonstrated_decisions;
@@ -592,6 +592,46 @@ pub fn cell_rule(compiled: &Compiled, cell: &str) -> Result<Option<Inferred>> {
     sequence_rule(&emit::world_file(model), &demos, &declared, &directed).map(Some)
 }
 
+/// W005 for every cell of a clean compilation whose demonstrations (but
+/// `sequence random` ones) follow no one sequence rule, at the first block
+/// that breaks the best one ([`cell_rule`]): `check` and `compile` report
+/// them with the compiler's warnings, so that a file `train` would refuse
+/// is named before anything is trained.
+pub fn rule_warnings(compiled: &Compiled) -> Vec<Warning> {
+    let model = &compiled.model;
+    model
+        .cells
+        .iter()
+        .filter_map(|cell| {
+            let Err(PipelineError::ContradictorySequence(why)) = cell_rule(compiled, &cell.name)
+            else {
+                return None;
+            };
+            let (block, sequence) = why
+                .first
+                .as_ref()
+                .map(|(_, b, s)| (b.clone(), s.clone()))
+                .unwrap_or_default();
+            let at = model
+                .demo_sets
+                .iter()
+                .find(|d| d.name == block)
+                .map(|d| d.loc)
+                .or_else(|| model.demos.iter().find(|d| d.name == block).map(|d| d.loc))
+                .unwrap_or(cell.loc);
+            Some(Warning::NoSequenceRule {
+                at,
+                cell: cell.name.clone(),
+                best: why.best.to_string(),
+                agree: why.agree,
+                demonstrations: why.demonstrations,
+                block,
+                sequence,
+            })
+        })
+        .collect()
+}
+
 /// Whether `sequence` (product names) follows `rule` in `inventory`
 /// (product names in listed order).
 fn follows(rule: &SequenceRule, inventory: &[&str], sequence: &[String]) -> bool {
@@ -736,23 +776,24 @@ pub fn sequence_rule(
     });
     let agree = demos.len() - best.exceptions.len();
     if !explains_majority(agree, demos.len()) {
-        let detail = match &best.exceptions[..] {
-            [first, ..] => format!(
-                "the best rule, {}, explains {agree} of {} demonstrations (block `{}`, demonstration {first}, handles {} in another order)",
-                best.rule,
-                demos.len(),
-                demos[*first].block,
-                demos[*first].sequence.join(", ")
-            ),
-            [] => String::new(),
-        };
-        return Err(PipelineError::ContradictorySequence { detail });
+        let first = best
+            .exceptions
+            .first()
+            .map(|&k| (k, demos[k].block.clone(), demos[k].sequence.clone()));
+        return Err(PipelineError::ContradictorySequence(Box::new(
+            Contradiction {
+                best: best.rule,
+                agree,
+                demonstrations: demos.len(),
+                first,
+            },
+        )));
     }
     Ok(best)
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use packwright_interface::Node;
 
@@ -900,9 +941,14 @@ mod tests {
         assert_eq!(with_skipped_swapped(&g, None), None);
     }
 
-    /// The cell, products and inventory of the rule tests below: six
-    /// products listed p1..p6, and `tail` (blocks) after them.
+    /// The rule of cell `c` in [`rule_cell`] with `tail`.
     fn rule_of(tail: &str) -> Result<Option<Inferred>> {
+        cell_rule(&rule_cell(tail), "c")
+    }
+
+    /// The cell `c`, products and inventory of the rule tests below (six
+    /// products listed p1..p6) and `tail` (blocks) after them, compiled.
+    pub(crate) fn rule_cell(tail: &str) -> Compiled {
         use packwright_compiler::{Anywhere, MemoryLoader, check};
         let text = format!(
             "cell c {{
@@ -932,9 +978,8 @@ inventory inv for c {{
 {tail}"
         );
         let loader = MemoryLoader::new().with("rule.pack", text);
-        let compiled = check(&loader, &["rule.pack".into()], &Anywhere)
-            .unwrap_or_else(|f| panic!("{}", f.render()));
-        cell_rule(&compiled, "c")
+        check(&loader, &["rule.pack".into()], &Anywhere)
+            .unwrap_or_else(|f| panic!("{}", f.render()))
     }
 
     /// A generated block declares `sequence descending`, and one

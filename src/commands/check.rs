@@ -8,7 +8,10 @@ use packwright_pipeline::reach::RobotWorkspace;
 
 pub fn run(args: &CheckArgs) -> anyhow::Result<Exit> {
     match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new()) {
-        Ok(compiled) => {
+        Ok(mut compiled) => {
+            // W005: demonstrations `train` would refuse.
+            let rules = packwright_pipeline::teach::rule_warnings(&compiled);
+            compiled.warnings.extend(rules);
             report_warnings(&compiled.sources, &compiled.warnings, args.json);
             if args.json {
                 outln!(

@@ -7,11 +7,14 @@ use crate::fsio::{AtomicDir, FsLoader};
 use packwright_pipeline::reach::RobotWorkspace;
 
 pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
-    let compiled = match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new())
-    {
-        Ok(ok) => ok,
-        Err(failed) => return Ok(report_failure(&failed, args.json)),
-    };
+    let mut compiled =
+        match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new()) {
+            Ok(ok) => ok,
+            Err(failed) => return Ok(report_failure(&failed, args.json)),
+        };
+    // W005: demonstrations `train` would refuse.
+    let rules = packwright_pipeline::teach::rule_warnings(&compiled);
+    compiled.warnings.extend(rules);
     if !args.json {
         super::report_warnings(&compiled.sources, &compiled.warnings, false);
     }
