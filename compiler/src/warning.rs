@@ -29,6 +29,9 @@ pub enum Warning {
         /// standing beside it from their places (their largest `jitter`;
         /// each was asked about anywhere within it).
         jitter_mm: f64,
+        /// Whether the pick is blocked with the others where they are
+        /// written too, not only where the jitter may draw them.
+        where_written: bool,
     },
     /// A product the robot picks at its written place, but not in some
     /// of a suite's scenarios, where the jitter draws it and a product
@@ -122,6 +125,8 @@ impl fmt::Display for Warning {
                 position,
                 pose,
                 by,
+                jitter_mm,
+                where_written,
                 ..
             } => {
                 write!(
@@ -129,18 +134,31 @@ impl fmt::Display for Warning {
                     "the robot cannot reach {pose} when it picks product `{product}` at ({:.3}, {:.3}) ",
                     position[0], position[1]
                 )?;
-                match by {
-                    Some((other, at, _)) => {
+                let drawn = *jitter_mm > 0.0 && !where_written;
+                match (by, drawn) {
+                    (Some((other, at, _)), false) => {
                         write!(f, "while `{other}` stands at ({:.3}, {:.3})", at[0], at[1])
                     }
-                    None => f.write_str("while the other products of its inventory stand"),
+                    (Some((other, at, _)), true) => write!(
+                        f,
+                        "while `{other}` stands up to {jitter_mm:.0} mm from ({:.3}, {:.3})",
+                        at[0], at[1]
+                    ),
+                    (None, false) => f.write_str("while the other products of its inventory stand"),
+                    (None, true) => write!(
+                        f,
+                        "while the other products of its inventory stand up to {jitter_mm:.0} mm from their places"
+                    ),
                 }?;
-                match self {
-                    Warning::PickBlocked { jitter_mm, .. } if *jitter_mm > 0.0 => write!(
+                match (*jitter_mm > 0.0, drawn) {
+                    (true, false) => write!(
                         f,
                         ", or up to {jitter_mm:.0} mm from there (the jitter of its inventory's blocks)"
                     ),
-                    _ => Ok(()),
+                    (true, true) => f.write_str(
+                        " (the jitter of its inventory's blocks); it can with the products where they are written",
+                    ),
+                    (false, _) => Ok(()),
                 }
             }
             Warning::DrawnPickBlocked {
@@ -218,6 +236,13 @@ impl Warning {
     /// The short text under the caret.
     pub fn label(&self) -> String {
         match self {
+            Warning::PickBlocked {
+                where_written: false,
+                jitter_mm,
+                ..
+            } => format!(
+                "every arm pose that reaches it meets a product beside it drawn up to {jitter_mm:.0} mm nearer"
+            ),
             Warning::PickBlocked { .. } => {
                 "every arm pose that reaches it meets a product beside it".into()
             }
@@ -262,6 +287,19 @@ impl Warning {
     /// How to fix it.
     pub fn help(&self) -> String {
         match self {
+            Warning::PickBlocked {
+                by,
+                where_written: false,
+                ..
+            } => {
+                let (other, apart) = by.as_ref().map_or(
+                    ("the products beside it".to_owned(), "them"),
+                    |(o, ..)| (format!("`{o}`"), "the two"),
+                );
+                format!(
+                    "the pick is free with the products where they are written, and blocked where the jitter draws {other} nearer: lower the jitter of the inventory's blocks, or move {apart} further apart"
+                )
+            }
             Warning::PickBlocked {
                 product,
                 by: Some((other, ..)),

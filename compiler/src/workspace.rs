@@ -537,6 +537,16 @@ fn standing(
             let by_packed = met.is_some_and(|(_, o)| {
                 picked.get(&(inv.cell, o.product, o.at.map(f64::to_bits))) == Some(&true)
             });
+            // Blocked with the others where they are written too, or only
+            // where the jitter may draw them (asked again without it).
+            let where_written = jitter <= 0.0 || {
+                let written: Vec<Standing> = others
+                    .iter()
+                    .map(|s| Standing { margin: 0.0, ..*s })
+                    .collect();
+                ws.pick_among(m, inv.cell, e.product, e.at, &written)
+                    .is_some()
+            };
             warnings.push(Warning::PickBlocked {
                 at: e.loc,
                 product: name(k),
@@ -545,6 +555,7 @@ fn standing(
                 by,
                 by_packed,
                 jitter_mm: jitter * 1000.0,
+                where_written,
             });
         }
     }

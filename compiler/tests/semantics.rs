@@ -465,20 +465,35 @@ fn standing_products_block_the_start_as_an_error_and_a_pick_as_a_warning() {
     };
     assert_eq!((product.as_str(), *pose), ("A", Pose::TopFace));
     assert_eq!(by.as_ref().map(|b| b.0.as_str()), Some("B"));
-    // The message says B was asked about anywhere the jitter may put it.
+    // The message says B was asked about anywhere the jitter may put it;
+    // A is blocked with B where written too.
     let message = c.warnings[0].to_string();
     assert!(
         message.ends_with("or up to 8 mm from there (the jitter of its inventory's blocks)"),
         "{message}"
     );
+    assert!(matches!(
+        c.warnings[0],
+        Warning::PickBlocked {
+            where_written: true,
+            ..
+        }
+    ));
     let asked = ws.asked.into_inner();
-    // W001's questions come first; then W003's, about the suite's picks
-    // (at the written places with the others widened by its 5 mm jitter
-    // and by twice that: B is blocked by neither, A already by W001, so
-    // no scenario is asked about).
-    let (w001, draws) = asked.split_at(asked.len().min(2));
+    // W001's questions come first (A's pick asked again with the others
+    // where written, once it is blocked within the jitter); then W003's,
+    // about the suite's picks (at the written places with the others
+    // widened by its 5 mm jitter and by twice that: B is blocked by
+    // neither, A already by W001, so no scenario is asked about).
+    let (w001, draws) = asked.split_at(asked.len().min(3));
     let names: Vec<&str> = w001.iter().map(|(n, _)| n.as_str()).collect();
-    assert_eq!(names, ["A", "B"], "C and E are packed by nothing");
+    assert_eq!(names, ["A", "A", "B"], "C and E are packed by nothing");
+    assert!(
+        w001[1].1.iter().all(|&m| m == 0.0),
+        "A asked again where written: {:?}",
+        w001[1].1
+    );
+    let w001 = [&w001[0], &w001[2]];
     let draws: Vec<(&str, f64)> = draws
         .iter()
         .map(|(n, m)| (n.as_str(), m.first().copied().unwrap_or(f64::NAN)))
