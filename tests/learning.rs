@@ -368,6 +368,101 @@ fn two_cells_with_their_own_products_keep_their_own_orders() {
     }
 }
 
+/// Two lines stocking the same products, one taught in inventory order
+/// and the other in reverse (helper L's shared-catalogue uses): no one
+/// rule explains their demonstrations together, and `train` refused them
+/// (exit 2). Each cell's own demonstrations follow one, so each keeps
+/// it.
+#[test]
+fn two_cells_sharing_products_in_opposite_orders_each_keep_their_own() {
+    let dir = scratch("learning", "shared-opposite");
+    let pack = dir.join("shared.pack");
+    fs::write(&pack, SHARED_OPPOSITE).expect("write the cells");
+    let compiled = dir.join("compiled").display().to_string();
+    let model = dir.join("model").display().to_string();
+    let out = packwright(&["compile", &pack.display().to_string(), "-o", &compiled]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let out = packwright(&[
+        "train",
+        &compiled,
+        "-o",
+        &model,
+        "--epochs",
+        "2",
+        "--dagger-rounds",
+        "0",
+        "--quiet",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let rule_of = |cell: &str| {
+        report["cell_rules"]
+            .get(cell)
+            .cloned()
+            .unwrap_or_else(|| report["sequence"].clone())
+    };
+    assert_eq!(rule_of("left"), "ascending", "{report}");
+    assert_eq!(rule_of("right"), "descending", "{report}");
+}
+
+const SHARED_OPPOSITE: &str = r#"cell left {
+  robot ur10
+  base (0, 0, 0)
+  suction 100 mm
+  pending (0.45, -0.50) to (0.85, -0.10)
+  box tray (0.00, 0.65) size (0.40, 0.30, 0.08)
+  slot g1 (-0.12, 0.58)
+  slot g2 ( 0.00, 0.58)
+  slot g3 ( 0.12, 0.58)
+}
+cell right {
+  robot ur10
+  base (0, 0, 0)
+  suction 100 mm
+  pending (0.45, 0.10) to (0.85, 0.50)
+  box tray (0.00, -0.65) size (0.40, 0.30, 0.08)
+  slot h1 (-0.12, -0.58)
+  slot h2 ( 0.00, -0.58)
+  slot h3 ( 0.12, -0.58)
+}
+product a1 cube 50 mm
+product a2 cube 50 mm
+product a3 cube 50 mm
+inventory la for left {
+  a1 (0.50, -0.20)
+  a2 (0.62, -0.20)
+  a3 (0.74, -0.20)
+}
+inventory ra for right {
+  a1 (0.50, 0.20)
+  a2 (0.62, 0.20)
+  a3 (0.74, 0.20)
+}
+order lo for la {
+  a1 -> g1
+  a2 -> g2
+  a3 -> g3
+}
+order ro for ra {
+  a1 -> h1
+  a2 -> h2
+  a3 -> h3
+}
+demo left_seen for lo {
+  sequence a1, a2, a3
+}
+demo left_again for lo {
+  sequence a1, a2, a3
+}
+demo right_seen for ro {
+  sequence a3, a2, a1
+}
+demo right_again for ro {
+  sequence a3, a2, a1
+}
+"#;
+
 const TWO_CELLS: &str = r#"cell left {
   robot ur10
   base (0, 0, 0)

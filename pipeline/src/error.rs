@@ -162,8 +162,8 @@ pub struct Contradiction {
     pub best: packwright_interface::SequenceRule,
     pub agree: usize,
     pub demonstrations: usize,
-    /// The first breaking demonstration: its index among those asked
-    /// about, its block and its products in the order handled.
+    /// The first breaking demonstration: its number within its block
+    /// (from 1), its block and its products in the order handled.
     pub first: Option<(usize, String, Vec<String>)>,
 }
 
@@ -172,7 +172,7 @@ impl std::fmt::Display for Contradiction {
         if let Some((k, block, sequence)) = &self.first {
             write!(
                 f,
-                "the best rule, {}, explains {} of {} demonstrations (block `{block}`, demonstration {k}, handles {} in another order)",
+                "the best rule, {}, explains {} of {} demonstrations (block `{block}`, its demonstration {k}, handles {} in another order)",
                 self.best,
                 self.agree,
                 self.demonstrations,

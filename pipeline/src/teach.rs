@@ -218,31 +218,66 @@ impl Lesson {
                 .filter(|b| b.kind == "demos" && b.priority.is_empty() && !b.any_order)
                 .map(|b| b.name.as_str())
                 .collect();
-            let inferred = sequence_rule(&world, &shown, &declared, &directed)?;
-            // Indices into `shown`.
-            let mut exceptions: BTreeSet<usize> = inferred.exceptions.iter().copied().collect();
-            if cells.len() > 1 {
-                for cell in &cells {
+            // Each cell's own demonstrations, read alone (indices into
+            // `shown`, and the rule they follow).
+            let alone: Vec<(&String, Vec<usize>, Result<Inferred>)> = cells
+                .iter()
+                .filter(|_| cells.len() > 1)
+                .map(|cell| {
                     let mine: Vec<usize> = (0..shown.len())
                         .filter(|&i| &shown[i].cell == cell)
                         .collect();
                     let own: Vec<DemonstrationRecord> =
                         mine.iter().map(|&i| shown[i].clone()).collect();
-                    let Some(alone) = (!own.is_empty())
-                        .then(|| sequence_rule(&world, &own, &declared, &directed).ok())
-                        .flatten()
-                        .filter(|a| orders_otherwise(&world, cell, &a.rule, &inferred.rule))
-                    else {
-                        continue;
-                    };
-                    let broken = mine.iter().any(|i| exceptions.contains(i));
-                    if own_rule(&world, &cells, cell, broken) {
-                        exceptions.retain(|i| !mine.contains(i));
-                        exceptions.extend(alone.exceptions.iter().map(|&e| mine[e]));
-                        cell_rules.insert(cell.clone(), alone.rule);
-                    } else {
-                        read_otherwise.push((cell.clone(), alone.rule));
+                    let rule = sequence_rule(&world, &own, &declared, &directed);
+                    (cell, mine, rule)
+                })
+                .filter(|(_, mine, _)| !mine.is_empty())
+                .collect();
+            // Cells taught in orders that no one rule explains together
+            // (two lines stocking the same products, one packed
+            // ascending, the other descending), each of which follows
+            // one: each keeps its own, and the rule for every other cell
+            // is the one that explains the most.
+            let (inferred, each_own) = match sequence_rule(&world, &shown, &declared, &directed) {
+                Ok(inferred) => (inferred, false),
+                Err(PipelineError::ContradictorySequence(why))
+                    if !alone.is_empty() && alone.iter().all(|(_, _, r)| r.is_ok()) =>
+                {
+                    let rule = why.best.clone();
+                    (
+                        Inferred {
+                            rule,
+                            exceptions: Vec::new(),
+                        },
+                        true,
+                    )
+                }
+                Err(e) => return Err(e),
+            };
+            let mut exceptions: BTreeSet<usize> = inferred.exceptions.iter().copied().collect();
+            for (cell, mine, own) in alone {
+                let Ok(own) = own else {
+                    continue;
+                };
+                let otherwise = orders_otherwise(&world, cell, &own.rule, &inferred.rule);
+                if each_own {
+                    exceptions.extend(own.exceptions.iter().map(|&e| mine[e]));
+                    if otherwise {
+                        cell_rules.insert(cell.clone(), own.rule);
                     }
+                    continue;
+                }
+                if !otherwise {
+                    continue;
+                }
+                let broken = mine.iter().any(|i| exceptions.contains(i));
+                if own_rule(&world, &cells, cell, broken) {
+                    exceptions.retain(|i| !mine.contains(i));
+                    exceptions.extend(own.exceptions.iter().map(|&e| mine[e]));
+                    cell_rules.insert(cell.clone(), own.rule);
+                } else {
+                    read_otherwise.push((cell.clone(), own.rule));
                 }
             }
             Inferred {
@@ -776,10 +811,16 @@ pub fn sequence_rule(
     });
     let agree = demos.len() - best.exceptions.len();
     if !explains_majority(agree, demos.len()) {
-        let first = best
-            .exceptions
-            .first()
-            .map(|&k| (k, demos[k].block.clone(), demos[k].sequence.clone()));
+        // Numbered within its block, from 1 (a block's demonstrations
+        // are numbered so in `train`'s other messages).
+        let first = best.exceptions.first().map(|&k| {
+            let within = demos[..k]
+                .iter()
+                .filter(|d| d.block == demos[k].block)
+                .count()
+                + 1;
+            (within, demos[k].block.clone(), demos[k].sequence.clone())
+        });
         return Err(PipelineError::ContradictorySequence(Box::new(
             Contradiction {
                 best: best.rule,
