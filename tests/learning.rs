@@ -295,6 +295,33 @@ fn demonstrations_in_random_order_teach_the_inventorys_order() {
     );
 }
 
+/// `source` written into `dir`, compiled (exit 0): the compiled directory.
+fn compiled_text(dir: &Path, source: &str) -> String {
+    let pack = dir.join("cells.pack");
+    fs::write(&pack, source).expect("write the cells");
+    let compiled = dir.join("compiled").display().to_string();
+    let out = packwright(&["compile", &pack.display().to_string(), "-o", &compiled]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    compiled
+}
+
+/// A short training of `compiled` into `to` (JSON metrics): what the
+/// demonstrations decide (rules, warnings) does not need a good model.
+fn short_train(compiled: &str, to: &str) -> Output {
+    packwright(&[
+        "train",
+        compiled,
+        "-o",
+        to,
+        "--epochs",
+        "2",
+        "--dagger-rounds",
+        "0",
+        "--quiet",
+        "--json",
+    ])
+}
+
 /// A model taught two cells keeps each cell's own order where the cells
 /// stock different products: `right`'s one demonstration reads as
 /// descending, where the order taught over both cells (a listed one)
@@ -304,28 +331,10 @@ fn demonstrations_in_random_order_teach_the_inventorys_order() {
 #[test]
 fn two_cells_with_their_own_products_keep_their_own_orders() {
     let dir = scratch("learning", "two-cells");
-    let pack = dir.join("two.pack");
-    fs::write(&pack, TWO_CELLS).expect("write the cells");
-    let compiled = dir.join("compiled").display().to_string();
+    let compiled = compiled_text(&dir, &format!("{TWO_LINES}{APART}"));
     let model = dir.join("model").display().to_string();
-    let out = packwright(&["compile", &pack.display().to_string(), "-o", &compiled]);
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
-    // A short training: the warning comes from the demonstrations, and
-    // the bytes compared below from the same seed.
-    let train = |to: &str| {
-        packwright(&[
-            "train",
-            &compiled,
-            "-o",
-            to,
-            "--epochs",
-            "2",
-            "--dagger-rounds",
-            "0",
-            "--quiet",
-            "--json",
-        ])
-    };
+    // The bytes compared below come from the same seed.
+    let train = |to: &str| short_train(&compiled, to);
     let out = train(&model);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
@@ -376,24 +385,9 @@ fn two_cells_with_their_own_products_keep_their_own_orders() {
 #[test]
 fn two_cells_sharing_products_in_opposite_orders_each_keep_their_own() {
     let dir = scratch("learning", "shared-opposite");
-    let pack = dir.join("shared.pack");
-    fs::write(&pack, SHARED_OPPOSITE).expect("write the cells");
-    let compiled = dir.join("compiled").display().to_string();
+    let compiled = compiled_text(&dir, &format!("{TWO_LINES}{SHARED_OPPOSITE}"));
     let model = dir.join("model").display().to_string();
-    let out = packwright(&["compile", &pack.display().to_string(), "-o", &compiled]);
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
-    let out = packwright(&[
-        "train",
-        &compiled,
-        "-o",
-        &model,
-        "--epochs",
-        "2",
-        "--dagger-rounds",
-        "0",
-        "--quiet",
-        "--json",
-    ]);
+    let out = short_train(&compiled, &model);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     let rule_of = |cell: &str| {
@@ -406,7 +400,8 @@ fn two_cells_sharing_products_in_opposite_orders_each_keep_their_own() {
     assert_eq!(rule_of("right"), "descending", "{report}");
 }
 
-const SHARED_OPPOSITE: &str = r#"cell left {
+/// Two lines, each with a tray of three slots.
+const TWO_LINES: &str = r#"cell left {
   robot ur10
   base (0, 0, 0)
   suction 100 mm
@@ -426,7 +421,43 @@ cell right {
   slot h2 ( 0.00, -0.58)
   slot h3 ( 0.12, -0.58)
 }
-product a1 cube 50 mm
+"#;
+
+/// Products stocked on one line each; `right` demonstrated in reverse.
+const APART: &str = r#"product a1 cube 50 mm
+product a2 cube 50 mm
+product a3 cube 50 mm
+product b1 cube 50 mm
+product b2 cube 50 mm
+product b3 cube 50 mm
+inventory la for left {
+  a1 (0.50, -0.20)
+  a2 (0.62, -0.20)
+  a3 (0.74, -0.20)
+}
+inventory rb for right {
+  b1 (0.50, 0.20)
+  b2 (0.62, 0.20)
+  b3 (0.74, 0.20)
+}
+order lo for la {
+  a1 -> g1
+  a2 -> g2
+}
+order ro for rb {
+  b1 -> h1
+  b3 -> h3
+}
+demo left_seen for lo {
+  sequence a1, a2
+}
+demo right_seen for ro {
+  sequence b3, b1
+}
+"#;
+
+/// The same three products on both lines, taught in opposite orders.
+const SHARED_OPPOSITE: &str = r#"product a1 cube 50 mm
 product a2 cube 50 mm
 product a3 cube 50 mm
 inventory la for left {
@@ -460,57 +491,5 @@ demo right_seen for ro {
 }
 demo right_again for ro {
   sequence a3, a2, a1
-}
-"#;
-
-const TWO_CELLS: &str = r#"cell left {
-  robot ur10
-  base (0, 0, 0)
-  suction 100 mm
-  pending (0.45, -0.50) to (0.85, -0.10)
-  box tray (0.00, 0.65) size (0.40, 0.30, 0.08)
-  slot g1 (-0.12, 0.58)
-  slot g2 ( 0.00, 0.58)
-  slot g3 ( 0.12, 0.58)
-}
-cell right {
-  robot ur10
-  base (0, 0, 0)
-  suction 100 mm
-  pending (0.45, 0.10) to (0.85, 0.50)
-  box tray (0.00, -0.65) size (0.40, 0.30, 0.08)
-  slot h1 (-0.12, -0.58)
-  slot h2 ( 0.00, -0.58)
-  slot h3 ( 0.12, -0.58)
-}
-product a1 cube 50 mm
-product a2 cube 50 mm
-product a3 cube 50 mm
-product b1 cube 50 mm
-product b2 cube 50 mm
-product b3 cube 50 mm
-inventory la for left {
-  a1 (0.50, -0.20)
-  a2 (0.62, -0.20)
-  a3 (0.74, -0.20)
-}
-inventory rb for right {
-  b1 (0.50, 0.20)
-  b2 (0.62, 0.20)
-  b3 (0.74, 0.20)
-}
-order lo for la {
-  a1 -> g1
-  a2 -> g2
-}
-order ro for rb {
-  b1 -> h1
-  b3 -> h3
-}
-demo left_seen for lo {
-  sequence a1, a2
-}
-demo right_seen for ro {
-  sequence b3, b1
 }
 "#;
