@@ -586,6 +586,24 @@ pub struct Inferred {
 /// random` show no order and are left out (`None` when only they teach
 /// the cell). An error when the others follow no one rule.
 pub fn cell_rule(compiled: &Compiled, cell: &str) -> Result<Option<Inferred>> {
+    let records = demonstration_records(compiled)?;
+    cell_rule_among(compiled, &records, &emit::world_file(&compiled.model), cell)
+}
+
+/// Every demonstration record of a compilation.
+fn demonstration_records(compiled: &Compiled) -> Result<Vec<DemonstrationRecord>> {
+    emit::demonstration_records(&compiled.model, &compiled.expanded)
+        .map_err(|e| PipelineError::Compile(Box::new(e)))
+}
+
+/// [`cell_rule`] from the compilation's demonstration `records` and
+/// `world`, made once for all its cells.
+fn cell_rule_among(
+    compiled: &Compiled,
+    records: &[DemonstrationRecord],
+    world: &WorldFile,
+    cell: &str,
+) -> Result<Option<Inferred>> {
     let any_order: BTreeSet<&str> = compiled
         .expanded
         .blocks
@@ -593,12 +611,11 @@ pub fn cell_rule(compiled: &Compiled, cell: &str) -> Result<Option<Inferred>> {
         .filter(|b| b.any_order)
         .map(|b| b.name.as_str())
         .collect();
-    let demos: Vec<DemonstrationRecord> =
-        emit::demonstration_records(&compiled.model, &compiled.expanded)
-            .map_err(|e| PipelineError::Compile(Box::new(e)))?
-            .into_iter()
-            .filter(|d| d.cell == cell && !any_order.contains(d.block.as_str()))
-            .collect();
+    let demos: Vec<DemonstrationRecord> = records
+        .iter()
+        .filter(|d| d.cell == cell && !any_order.contains(d.block.as_str()))
+        .cloned()
+        .collect();
     if demos.is_empty() {
         return Ok(None);
     }
@@ -624,7 +641,7 @@ pub fn cell_rule(compiled: &Compiled, cell: &str) -> Result<Option<Inferred>> {
         .filter(|b| b.kind == "demos" && b.priority.is_empty() && !b.any_order)
         .map(|b| b.name.as_str())
         .collect();
-    sequence_rule(&emit::world_file(model), &demos, &declared, &directed).map(Some)
+    sequence_rule(world, &demos, &declared, &directed).map(Some)
 }
 
 /// W005 for every cell of a clean compilation whose demonstrations (but
@@ -634,11 +651,18 @@ pub fn cell_rule(compiled: &Compiled, cell: &str) -> Result<Option<Inferred>> {
 /// is named before anything is trained.
 pub fn rule_warnings(compiled: &Compiled) -> Vec<Warning> {
     let model = &compiled.model;
+    // A compilation whose records cannot be made has no rules to warn
+    // about (`train` reports that itself).
+    let Ok(records) = demonstration_records(compiled) else {
+        return Vec::new();
+    };
+    let world = emit::world_file(model);
     model
         .cells
         .iter()
         .filter_map(|cell| {
-            let Err(PipelineError::ContradictorySequence(why)) = cell_rule(compiled, &cell.name)
+            let Err(PipelineError::ContradictorySequence(why)) =
+                cell_rule_among(compiled, &records, &world, &cell.name)
             else {
                 return None;
             };
