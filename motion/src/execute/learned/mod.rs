@@ -419,12 +419,16 @@ impl<W: World> Learned<'_, W> {
                 .into_iter()
                 .filter(|[from, end]| arm.within_limits(from) && arm.within_limits(end))
                 .find_map(|[from, end]| {
+                    // Through `from` where it is another point (an end
+                    // taken in another shape starts nowhere else: its
+                    // straight motion was just checked).
                     s.route(Connect::Straight, 0, start, end, load)
                         .ok()
                         .or_else(|| {
                             let waypoints = vec![from, end];
-                            checked_samples(arm, &s.checker, start, &waypoints, load)
-                                .ok()
+                            (from != end)
+                                .then(|| checked_samples(arm, &s.checker, start, &waypoints, load))
+                                .and_then(Result::ok)
                                 .map(|samples| Route { waypoints, samples })
                         })
                 })
