@@ -1,17 +1,12 @@
 //! `packwright check`: diagnostics only.
 
-use super::{report_failure, report_warnings, summary_line};
+use super::{checked, report_failure, report_warnings, summary_line};
 use crate::Exit;
 use crate::cli::CheckArgs;
-use crate::fsio::FsLoader;
-use packwright_pipeline::reach::RobotWorkspace;
 
 pub fn run(args: &CheckArgs) -> anyhow::Result<Exit> {
-    match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new()) {
-        Ok(mut compiled) => {
-            // W005: demonstrations `train` would refuse.
-            let rules = packwright_pipeline::teach::rule_warnings(&compiled);
-            compiled.warnings.extend(rules);
+    match checked(&args.files) {
+        Ok(compiled) => {
             report_warnings(&compiled.sources, &compiled.warnings, args.json);
             if args.json {
                 outln!(

@@ -3,18 +3,13 @@
 use super::{report_failure, summary_line};
 use crate::Exit;
 use crate::cli::CompileArgs;
-use crate::fsio::{AtomicDir, FsLoader};
-use packwright_pipeline::reach::RobotWorkspace;
+use crate::fsio::AtomicDir;
 
 pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
-    let mut compiled =
-        match packwright_compiler::check(&FsLoader, &args.files, &RobotWorkspace::new()) {
-            Ok(ok) => ok,
-            Err(failed) => return Ok(report_failure(&failed, args.json)),
-        };
-    // W005: demonstrations `train` would refuse.
-    let rules = packwright_pipeline::teach::rule_warnings(&compiled);
-    compiled.warnings.extend(rules);
+    let compiled = match super::checked(&args.files) {
+        Ok(ok) => ok,
+        Err(failed) => return Ok(report_failure(&failed, args.json)),
+    };
     if !args.json {
         super::report_warnings(&compiled.sources, &compiled.warnings, false);
     }

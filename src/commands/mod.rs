@@ -43,6 +43,22 @@ pub fn report_failure(failed: &Failed, json: bool) -> Exit {
     }
 }
 
+/// `files` checked as `check` and `compile` check them: the compiler's
+/// diagnostics with the robot's workspace, and W005 for demonstrations
+/// `train` would refuse ([`packwright_pipeline::teach::rule_warnings`]).
+pub fn checked(
+    files: &[std::path::PathBuf],
+) -> Result<packwright_compiler::Compiled, packwright_compiler::Failed> {
+    let mut compiled = packwright_compiler::check(
+        &crate::fsio::FsLoader,
+        files,
+        &packwright_pipeline::reach::RobotWorkspace::new(),
+    )?;
+    let rules = packwright_pipeline::teach::rule_warnings(&compiled);
+    compiled.warnings.extend(rules);
+    Ok(compiled)
+}
+
 /// Prints a compilation's warnings: text on stderr, or (`json`) JSON
 /// Lines on stdout, `"type": "diagnostic"` with `"severity": "warning"`.
 pub fn report_warnings(sources: &SourceMap, warnings: &[Warning], json: bool) {
