@@ -56,6 +56,10 @@ impl Loader for FsLoader {
     fn read(&self, path: &Path) -> Result<String, Unreadable> {
         read_source(path)
     }
+
+    fn identity(&self, path: &Path) -> Option<PathBuf> {
+        fs::canonicalize(path).ok()
+    }
 }
 
 /// The temporary siblings this process is writing: removed when the run
@@ -204,6 +208,15 @@ fn write_synced(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 /// not a regular file (a device such as `/dev/null`, a pipe, a terminal)
 /// is written to as it is: renaming a file over it would destroy it.
 pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    // What the path names in the end, as the kernel follows it: `/dev/stdout`
+    // into a pipe is a link to a link (`/proc/self/fd/1`) whose target
+    // (`pipe:[…]`) is no path to follow by hand.
+    if let Ok(m) = fs::metadata(path)
+        && !m.is_file()
+        && !m.is_dir()
+    {
+        return write_in_place(path, bytes);
+    }
     let followed;
     let path = match fs::symlink_metadata(path) {
         Ok(m) if m.file_type().is_symlink() => {
@@ -226,13 +239,7 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
             bail!("{} is a directory, not a file", path.display());
         }
         if !m.is_file() {
-            let mut f = fs::OpenOptions::new()
-                .write(true)
-                .open(path)
-                .with_context(|| format!("cannot open {}", path.display()))?;
-            return f
-                .write_all(bytes)
-                .with_context(|| format!("cannot write {}", path.display()));
+            return write_in_place(path, bytes);
         }
     }
     // A missing parent directory is made, as `compile` makes its output
@@ -246,9 +253,17 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     remove_stale_siblings(path);
     let tmp = sibling(path, "tmp");
     writing(&tmp);
-    let replaced = write_synced(&tmp, bytes).and_then(|()| {
-        fs::rename(&tmp, path).with_context(|| format!("cannot replace {}", path.display()))
-    });
+    // A file replaced keeps its permissions (`fmt` of a 0640 file).
+    let kept = fs::metadata(path).ok().map(|m| m.permissions());
+    let replaced = write_synced(&tmp, bytes)
+        .and_then(|()| match kept {
+            Some(p) => fs::set_permissions(&tmp, p)
+                .with_context(|| format!("cannot set the permissions of {}", tmp.display())),
+            None => Ok(()),
+        })
+        .and_then(|()| {
+            fs::rename(&tmp, path).with_context(|| format!("cannot replace {}", path.display()))
+        });
     if replaced.is_err() {
         let _ = fs::remove_file(&tmp);
     }
@@ -256,12 +271,87 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     replaced
 }
 
-/// True if `dir` may be replaced: it holds nothing, or earlier output
-/// (it has the file `marker`).
-fn replaceable(dir: &Path, marker: &str) -> anyhow::Result<bool> {
-    let mut entries =
-        fs::read_dir(dir).with_context(|| format!("cannot read {}", dir.display()))?;
-    Ok(entries.next().is_none() || dir.join(marker).is_file())
+/// Writes `bytes` to what `path` is (a device, a pipe, a terminal).
+fn write_in_place(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let mut f = fs::OpenOptions::new()
+        .write(true)
+        .open(path)
+        .with_context(|| format!("cannot open {}", path.display()))?;
+    f.write_all(bytes)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Refuses to replace `dir` unless it holds nothing, or earlier output of
+/// the same command and nothing else: the file `marker` (whose `schema`
+/// is one of packwright's) and no entry but regular files named in
+/// `names` (what the command writes). Replacing a directory deletes what
+/// it holds: a model trained into a compiled directory, or notes beside a
+/// model's files, would go with it.
+fn ensure_replaceable(dir: &Path, marker: &str, names: &[&str]) -> anyhow::Result<()> {
+    let entries: Vec<String> = fs::read_dir(dir)
+        .with_context(|| format!("cannot read {}", dir.display()))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    if entries.is_empty() {
+        return Ok(());
+    }
+    let refuse = |why: String| {
+        anyhow::anyhow!(
+            "refusing to replace {}: {why}; move what it holds elsewhere, or choose another output directory",
+            dir.display()
+        )
+    };
+    if !ours(&dir.join(marker)) {
+        return Err(refuse(format!(
+            "it is not empty and holds no {marker} from an earlier run"
+        )));
+    }
+    let mut foreign: Vec<&String> = entries
+        .iter()
+        .filter(|n| !names.contains(&n.as_str()) || !dir.join(n).is_file())
+        .collect();
+    foreign.sort();
+    if let Some(first) = foreign.first() {
+        let more = match foreign.len() {
+            1 => String::new(),
+            2 => format!(" and `{}`", foreign[1]),
+            n => format!(" and {} more", n - 1),
+        };
+        return Err(refuse(format!(
+            "besides an earlier run's output it holds `{first}`{more}, which would be deleted with it"
+        )));
+    }
+    Ok(())
+}
+
+/// Whether `marker` is a file that packwright wrote: JSON whose `schema`
+/// names one of packwright's formats (read no further than 1 MiB).
+fn ours(marker: &Path) -> bool {
+    let Ok(file) = fs::File::open(marker) else {
+        return false;
+    };
+    let mut text = String::new();
+    if file.take(1 << 20).read_to_string(&mut text).is_err() {
+        return false;
+    }
+    serde_json::from_str::<serde_json::Value>(&text).is_ok_and(|v| {
+        v.get("schema")
+            .and_then(|s| s.as_str())
+            .is_some_and(|s| s.starts_with("packwright."))
+    })
+}
+
+/// Whether `dir` could be replaced by output whose files are `names`
+/// (`marker` among them), checked before a long run (`train`) that
+/// would otherwise find out only when it writes.
+pub fn check_replaceable(dir: &Path, marker: &str, names: &[&str]) -> anyhow::Result<()> {
+    recover_interrupted(dir);
+    match fs::metadata(dir) {
+        Ok(m) if !m.is_dir() => bail!("{} exists and is not a directory", dir.display()),
+        Ok(_) => ensure_replaceable(dir, marker, names),
+        Err(_) => Ok(()),
+    }
 }
 
 /// A directory being written: files go into a temporary sibling, which
@@ -275,21 +365,11 @@ pub struct AtomicDir {
 
 impl AtomicDir {
     /// Starts replacing `dir`. An existing `dir` is replaced only if it is
-    /// empty or holds `marker` (the file every earlier output of the same
-    /// command has).
-    pub fn begin(dir: &Path, marker: &str) -> anyhow::Result<AtomicDir> {
-        recover_interrupted(dir);
-        if dir.exists() {
-            if !dir.is_dir() {
-                bail!("{} exists and is not a directory", dir.display());
-            }
-            if !replaceable(dir, marker)? {
-                bail!(
-                    "refusing to replace {}: it is not empty and holds no {marker} from an earlier run",
-                    dir.display()
-                );
-            }
-        }
+    /// empty or holds earlier output of the same command alone: `marker`
+    /// (the file every such output has) and other files named in `names`
+    /// ([`ensure_replaceable`]).
+    pub fn begin(dir: &Path, marker: &str, names: &[&str]) -> anyhow::Result<AtomicDir> {
+        check_replaceable(dir, marker, names)?;
         if let Some(parent) = dir.parent().filter(|p| !p.as_os_str().is_empty()) {
             fs::create_dir_all(parent)
                 .with_context(|| format!("cannot create {}", parent.display()))?;
@@ -381,14 +461,16 @@ impl OutputFile for SyncedFile {
 
 /// Writes the artifacts into `dir`: first into a temporary sibling
 /// directory, then swapped into place, so that `dir` is never half-written.
-/// An existing `dir` is replaced only if it is empty or holds `marker` (the
-/// file every earlier output of the same command has).
+/// An existing `dir` is replaced only if it holds nothing but an earlier
+/// output of the same files ([`AtomicDir::begin`]; `marker` is the file
+/// every such output has).
 pub fn write_dir_atomically(
     dir: &Path,
     artifacts: &[Artifact],
     marker: &str,
 ) -> anyhow::Result<()> {
-    let out = AtomicDir::begin(dir, marker)?;
+    let names: Vec<&str> = artifacts.iter().map(|a| a.name).collect();
+    let out = AtomicDir::begin(dir, marker, &names)?;
     for a in artifacts {
         write_synced(&out.path(a.name), &a.bytes)?;
     }
@@ -449,6 +531,23 @@ mod tests {
         let _ = fs::remove_dir_all(&dir);
     }
 
+    /// A file replaced keeps its permissions (`fmt` rewrote a 0640 file
+    /// as 0644).
+    #[cfg(unix)]
+    #[test]
+    fn a_replaced_file_keeps_its_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = scratch("mode");
+        let file = dir.join("cell.pack");
+        fs::write(&file, "old").expect("written");
+        fs::set_permissions(&file, fs::Permissions::from_mode(0o640)).expect("mode");
+        write_file_atomically(&file, b"new").expect("replaced");
+        let mode = fs::metadata(&file).expect("there").permissions().mode();
+        assert_eq!(mode & 0o777, 0o640);
+        assert_eq!(fs::read_to_string(&file).expect("read"), "new");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
     fn scratch(name: &str) -> PathBuf {
         let dir =
             std::env::temp_dir().join(format!("packwright-fsio-{}-{name}", std::process::id()));
@@ -487,6 +586,47 @@ mod tests {
         }
     }
 
+    /// A manifest as an earlier run wrote it, told apart by `run`.
+    fn manifest(run: &str) -> String {
+        format!(r#"{{"schema": "packwright.manifest", "run": "{run}"}}"#)
+    }
+
+    /// An earlier output is replaced; one that holds anything else too (a
+    /// model trained into a compiled directory, a user's notes), or whose
+    /// marker packwright did not write, is refused and left as it was.
+    #[test]
+    fn only_an_earlier_output_alone_is_replaced() {
+        let dir = scratch("replace");
+        let out = dir.join("out");
+        let write =
+            |run: &str| write_dir_atomically(&out, &[artifact(&manifest(run))], "manifest.json");
+        write("first").expect("a new directory");
+        write("second").expect("an earlier output");
+        fs::create_dir_all(out.join("model")).expect("created");
+        fs::write(out.join("model/config.json"), "{}").expect("written");
+        let err = write("third").expect_err("a model inside");
+        assert!(err.to_string().contains("`model`"), "{err}");
+        assert!(out.join("model/config.json").is_file(), "the model kept");
+        fs::remove_dir_all(out.join("model")).expect("removed");
+        fs::write(out.join("notes.txt"), "keep").expect("written");
+        fs::write(out.join("todo.txt"), "keep").expect("written");
+        let err = write("third").expect_err("notes beside it");
+        assert!(
+            err.to_string().contains("`notes.txt` and `todo.txt`"),
+            "{err}"
+        );
+        fs::remove_file(out.join("notes.txt")).expect("removed");
+        fs::remove_file(out.join("todo.txt")).expect("removed");
+        fs::write(out.join("manifest.json"), r#"{"name": "a web app"}"#).expect("written");
+        let err = write("third").expect_err("someone else's manifest");
+        assert!(err.to_string().contains("holds no manifest.json"), "{err}");
+        assert_eq!(
+            fs::read_to_string(out.join("manifest.json")).expect("kept"),
+            r#"{"name": "a web app"}"#
+        );
+        let _ = fs::remove_dir_all(&dir);
+    }
+
     /// A run killed between its two renames left no `out`, only
     /// `.out.old-PID`: the next run puts it back before anything else, so
     /// the old output is never removed as debris.
@@ -500,16 +640,16 @@ mod tests {
         // Above Linux's largest process id: never alive.
         let aside = dir.join(".out.old-4194400");
         let half_new = dir.join(".out.tmp-4194400");
-        for (d, text) in [(&aside, "old"), (&half_new, "new")] {
+        for (d, run) in [(&aside, "old"), (&half_new, "new")] {
             fs::create_dir_all(d).expect("created");
-            fs::write(d.join("manifest.json"), text).expect("written");
+            fs::write(d.join("manifest.json"), manifest(run)).expect("written");
         }
         assert!(recover_interrupted(&out));
         assert_eq!(
             fs::read_to_string(out.join("manifest.json"))
                 .ok()
                 .as_deref(),
-            Some("old")
+            Some(manifest("old").as_str())
         );
         assert!(!aside.exists());
         assert!(!recover_interrupted(&out), "only when `out` is missing");
@@ -517,12 +657,13 @@ mod tests {
         // The same through a write: put back, then replaced whole, and the
         // killed run's temporary directory removed.
         fs::rename(&out, &aside).expect("moved aside");
-        write_dir_atomically(&out, &[artifact("newer")], "manifest.json").expect("written");
+        write_dir_atomically(&out, &[artifact(&manifest("newer"))], "manifest.json")
+            .expect("written");
         assert_eq!(
             fs::read_to_string(out.join("manifest.json"))
                 .ok()
                 .as_deref(),
-            Some("newer")
+            Some(manifest("newer").as_str())
         );
         assert!(!aside.exists() && !half_new.exists(), "no debris");
         let _ = fs::remove_dir_all(&dir);

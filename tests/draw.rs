@@ -12,7 +12,7 @@ use packwright_pipeline::episode::{episode, find_setup};
 use packwright_pipeline::reach::RobotWorkspace;
 use packwright_recording::{Journal, JournalWorld};
 use std::fs;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Output;
 
 /// Elements whose `class` attribute starts with `class` followed by a
@@ -432,5 +432,30 @@ fn diagnostics_about_what_the_picture_does_not_show_are_counted() {
     assert!(
         stderr.contains("4 diagnostics (1 drawn where it is, 0 more listed under the picture, 3 about what this picture does not show)"),
         "{stderr}"
+    );
+}
+
+/// `-o /dev/stdout` into a pipe (`draw … -o /dev/stdout | less`): the
+/// picture goes down the pipe, not into a temporary file beside a path
+/// that is no file (`/proc/self/fd/pipe:[…]`).
+#[test]
+fn a_picture_written_to_stdout_goes_down_its_pipe() {
+    let o = packwright(&["draw", "orders/cells/line2.pack", "-o", "/dev/stdout"]);
+    if !Path::new("/dev/stdout").exists() {
+        return;
+    }
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    is_svg(
+        String::from_utf8_lossy(&o.stdout)
+            .split("</svg>")
+            .next()
+            .map(|s| format!("{s}</svg>"))
+            .as_deref()
+            .unwrap_or_default(),
     );
 }

@@ -60,9 +60,15 @@ fn a_killed_runs_temporary_directories_are_removed_by_the_next_run() {
     let stale = dir.join(".out.tmp-4194400");
     let stale_old = dir.join(".out.old-4194401");
     let live = dir.join(format!(".out.tmp-{}", std::process::id()));
+    // As an earlier compile left them (`compile` replaces a directory
+    // only when its manifest is packwright's).
     for d in [&stale, &stale_old, &live] {
         fs::create_dir_all(d).expect("created");
-        fs::write(d.join("manifest.json"), "{}").expect("written");
+        fs::write(
+            d.join("manifest.json"),
+            r#"{"schema": "packwright.manifest"}"#,
+        )
+        .expect("written");
     }
     let target = out.display().to_string();
     let result = packwright(&["compile", "orders/customers/pine_gifts.pack", "-o", &target]);

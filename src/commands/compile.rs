@@ -15,7 +15,8 @@ pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
     }
     // Checked before anything is written; then the artifacts are streamed
     // into a temporary sibling of the output, swapped in when complete.
-    let out = AtomicDir::begin(&args.output, packwright_compiler::file::MANIFEST)?;
+    let file = &packwright_compiler::file::ALL;
+    let out = AtomicDir::begin(&args.output, file[0], file)?;
     let written = match packwright_compiler::emit::emit(
         &compiled.sources,
         &compiled.model,

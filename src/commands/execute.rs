@@ -138,6 +138,10 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
         &sequence,
     );
     let entries = journal.take();
+    // The run's report first: a picture or recording that cannot be
+    // written (a full disk, `--svg` naming a directory) loses nothing of
+    // it, and exits 2 after it.
+    let exit = print_outcome(args, &name, &report, "simulated")?;
     if let Some(path) = &args.svg {
         write_executed_svg(
             path,
@@ -170,7 +174,7 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
         write_recording(path, &[run])?;
         errln!("wrote {}", path.display());
     }
-    print_outcome(args, &name, &report, "simulated")
+    Ok(exit)
 }
 
 /// Prints the report and picks the exit code.

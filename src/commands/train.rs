@@ -4,7 +4,7 @@
 
 use crate::Exit;
 use crate::cli::TrainArgs;
-use crate::fsio::write_dir_atomically;
+use crate::fsio::{check_replaceable, write_dir_atomically};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use packwright_compiler::emit::Artifact;
 use packwright_motion::execute::MAX_POLICY_STEPS;
@@ -27,8 +27,21 @@ fn bar(len: u64, quiet: bool, template: &str) -> ProgressBar {
     bar
 }
 
+/// What `train` writes into its output directory.
+fn model_files() -> Vec<&'static str> {
+    let mut names = packwright_nets::FILES.to_vec();
+    names.push(METRICS);
+    names
+}
+
+/// The training report beside the weights.
+const METRICS: &str = "metrics.json";
+
 pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
     let lesson = Lesson::read(&args.dir, &args.demos)?;
+    // Before the replay and the training: an output that would be
+    // refused is said at once, not after minutes of work.
+    check_replaceable(&args.output, packwright_nets::FILES[0], &model_files())?;
     let replaying = bar(
         (lesson.chosen.len() + lesson.rehearsals.len()) as u64,
         args.quiet,
@@ -106,10 +119,10 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
         .collect();
     let metrics_json = serde_json::to_vec_pretty(&report)?;
     artifacts.push(Artifact {
-        name: "metrics.json",
+        name: METRICS,
         bytes: metrics_json,
     });
-    write_dir_atomically(&args.output, &artifacts, "config.json")?;
+    write_dir_atomically(&args.output, &artifacts, packwright_nets::FILES[0])?;
     if args.json {
         outln!("{}", serde_json::to_string(&report)?);
     } else {

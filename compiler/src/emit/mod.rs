@@ -40,6 +40,16 @@ pub mod file {
     pub const DEMONSTRATIONS: &str = "demonstrations.jsonl";
     pub const COMBINATIONS: &str = "combinations.jsonl";
     pub const GRAPHS: &str = "graphs.safetensors";
+    /// Every file, the manifest first.
+    pub const ALL: [&str; 7] = [
+        MANIFEST,
+        LABELS,
+        ORDERS,
+        SCENARIOS,
+        DEMONSTRATIONS,
+        COMBINATIONS,
+        GRAPHS,
+    ];
 }
 
 /// A file written, and its length.
