@@ -213,6 +213,22 @@ fn compile_replaces_artifacts_but_never_other_directories() {
         fs::read(dir.join("out/manifest.json")).expect("manifest"),
         second
     );
+    // A model trained into the compiled directory (`train out -o
+    // out/model`) would go with it: refused, everything kept.
+    fs::create_dir_all(dir.join("out/model")).expect("dir");
+    fs::write(dir.join("out/model/config.json"), "{}").expect("write");
+    let refused = packwright(&["compile", "orders/cells/line2.pack", "-o", &out]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(
+        text(&refused.stderr).contains("holds `model`"),
+        "{}",
+        text(&refused.stderr)
+    );
+    assert!(dir.join("out/model/config.json").is_file());
+    assert_eq!(
+        fs::read(dir.join("out/manifest.json")).expect("manifest"),
+        second
+    );
     let leftovers: Vec<_> = fs::read_dir(&dir)
         .expect("dir")
         .flatten()
@@ -222,6 +238,17 @@ fn compile_replaces_artifacts_but_never_other_directories() {
         leftovers.is_empty(),
         "temporary directories left behind: {leftovers:?}"
     );
+}
+
+/// A file named by its absolute path and `use`d by a relative one (or
+/// reached through a link) is one file, loaded once: not its cells and
+/// products defined twice (E020).
+#[test]
+fn a_file_reached_by_two_paths_is_loaded_once() {
+    let cell = fs::canonicalize("orders/cells/line2.pack").expect("the cell file");
+    let cell = cell.display().to_string();
+    let both = packwright(&["check", &cell, "orders/suites/teach.pack"]);
+    assert_eq!(both.status.code(), Some(0), "{}", text_of(&both));
 }
 
 #[test]

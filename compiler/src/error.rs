@@ -203,6 +203,9 @@ pub enum Error {
         pose: Pose,
         /// Where the tool tip would be (world frame, m).
         tip: [f64; 3],
+        /// Picking: the empty cell allows the pose, the product itself
+        /// does not (the wrist over a short cup meets it).
+        meets_itself: bool,
     },
     #[error(
         "the robot cannot start in cell `{cell}` while the products of inventory `{inventory}` stand there: every start pose over the middle of the `pending` area meets `{by}`"
@@ -496,12 +499,12 @@ impl Error {
                 suggestion: Some(s), ..
             } => format!("did you mean `{s}`?"),
             Error::Unknown { known, kind, .. } if known.is_empty() => format!("define the {kind} first"),
-            Error::Unknown { known, scope, .. } => {
+            Error::Unknown { known, kind, .. } => {
                 let mut list = known.iter().take(12).map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", ");
                 if known.len() > 12 {
                     list.push_str(", ...");
                 }
-                format!("{scope} has {list}")
+                format!("the {} known here: {list}", crate::resolve::plural(kind))
             }
             Error::MissingStatement { example, .. } => format!("add a line such as `{example}`"),
             Error::StatementTwice { .. } => "keep only one of them".into(),
@@ -523,6 +526,7 @@ impl Error {
             Error::OutOfReach { min, max, .. } => format!("the UR10 reaches between {min:.2} m and {max:.2} m from its base axis; move it or the `base`"),
             Error::FarFromBase { max, .. } => format!("check the number and its unit: lengths and positions are metres unless they carry `mm` or `cm` (`0.65`, `650 mm`); every pending area and box lies within {max} m of the cell's `base`"),
             Error::Unreachable { pose: Pose::Start, .. } => "the arm starts with its cup 0.35 m over the middle of the `pending` area: bring the area nearer the robot's base (or the `base` nearer the area)".into(),
+            Error::Unreachable { meets_itself: true, .. } => "with the cup on the product's top face, the arm's wrist (or the cup's own body) meets the product itself: the cup is too short for this arm. Use a longer cup (`suction`)".into(),
             Error::Unreachable { pose: Pose::TopFace, tip, .. } if tip[2] <= THIN_TOP_FACE => format!("the top face is {:.0} mm above the table, and the cup is kept a few millimetres clear of everything but the product it picks: it would meet the table, wherever the product stands. Check the product's height; one thinner than {:.0} mm cannot be picked by this cup", tip[2] * 1000.0, THIN_TOP_FACE * 1000.0 + 1.0),
             Error::Unreachable { pose, tip, .. } if pose.is_picking() && tip[2] > HIGH_TIP => format!("the tool tip would be {:.2} m above the table, over the product's top face: check the product's height (sizes are metres unless they carry `mm` or `cm`); a product this tall can be picked only near the robot's base, with a low `lift` and a short cup (`suction`)", tip[2]),
             Error::Unreachable { pose, .. } if pose.is_picking() => "move the product nearer the robot's base (or the `base` nearer the products), or lower the cell's `lift`; the cup (`suction`) reaches down from the wrist, so a shorter cup reaches further".into(),

@@ -12,6 +12,8 @@ pub struct Loaded {
     pub sources: SourceMap,
     pub files: Vec<(FileId, ast::File)>,
     pub errors: Vec<Error>,
+    /// Each loaded file's [`Loader::identity`], where the loader gives one.
+    identities: Vec<(PathBuf, FileId)>,
 }
 
 pub fn load(loader: &dyn Loader, roots: &[PathBuf]) -> Loaded {
@@ -19,6 +21,7 @@ pub fn load(loader: &dyn Loader, roots: &[PathBuf]) -> Loaded {
         sources: SourceMap::default(),
         files: Vec::new(),
         errors: Vec::new(),
+        identities: Vec::new(),
     };
     let mut stack = Vec::new();
     for root in roots {
@@ -35,7 +38,12 @@ fn visit(
     stack: &mut Vec<FileId>,
 ) {
     let path = normalize(path);
-    if let Some(id) = state.sources.find(&path) {
+    let identity = loader.identity(&path);
+    let same = identity
+        .as_ref()
+        .and_then(|i| state.identities.iter().find(|(j, _)| j == i))
+        .map(|&(_, id)| id);
+    if let Some(id) = state.sources.find(&path).or(same) {
         if let (Some(pos), Some(at)) = (stack.iter().position(|s| *s == id), used_at) {
             let chain = stack[pos..]
                 .iter()
@@ -63,6 +71,9 @@ fn visit(
         }
     };
     let id = state.sources.add(path.clone(), text);
+    if let Some(identity) = identity {
+        state.identities.push((identity, id));
+    }
     let parsed = match state.sources.get(id) {
         Some(f) => packwright_grammar::parse(&f.text),
         None => return,

@@ -85,7 +85,7 @@ impl Table {
     }
 }
 
-fn plural(kind: &str) -> String {
+pub fn plural(kind: &str) -> String {
     match kind.strip_suffix('y') {
         Some(stem) => format!("{stem}ies"),
         None => format!("{kind}s"),
@@ -242,10 +242,12 @@ fn within_workspace(
     boxes: &[BoxDef],
     errors: &mut Vec<Error>,
 ) -> bool {
+    // Areas and boxes stand on the table (z = 0): a base written in
+    // millimetres (`base (0, 0, 400)`) puts them 400 m below it.
     let farthest = |r: &Rect| {
         let dx = (r.min[0] - base[0]).abs().max((r.max[0] - base[0]).abs());
         let dy = (r.min[1] - base[1]).abs().max((r.max[1] - base[1]).abs());
-        dx.hypot(dy)
+        dx.hypot(dy).hypot(base[2])
     };
     let mut far = vec![(
         "the pending area".to_string(),
@@ -286,6 +288,8 @@ pub const MAX_MASS: f64 = 10.0;
 /// The largest side a product may have (m): a box of it held by the cup
 /// would reach past the UR10's 1.3 m from any slot.
 pub const MAX_PRODUCT_SIZE: f64 = 1.0;
+/// The shortest product side (m): the simulator builds nothing thinner.
+pub const MIN_PRODUCT_SIZE: f64 = 0.001;
 
 impl Resolver<'_> {
     /// Whether `value` is above zero; else an error saying that `what`
@@ -749,7 +753,8 @@ impl Resolver<'_> {
                 .collect(),
         };
         let oversized: Vec<&ast::Length> = lengths
-            .into_iter()
+            .iter()
+            .copied()
             .filter(|l| l.metres > MAX_PRODUCT_SIZE)
             .collect();
         for l in &oversized {
@@ -769,7 +774,19 @@ impl Resolver<'_> {
                 fix,
             });
         }
-        if !oversized.is_empty() {
+        let thin: Vec<&ast::Length> = lengths
+            .iter()
+            .copied()
+            .filter(|l| l.metres < MIN_PRODUCT_SIZE)
+            .collect();
+        for l in &thin {
+            self.errors.push(Error::BadGeometry {
+                at: Loc::new(f, l.span),
+                what: "a product side must be at least 1 mm".into(),
+                fix: "check the number and its unit (sizes are metres unless they carry `mm` or `cm`): nothing thinner than 1 mm can be picked by a suction cup".into(),
+            });
+        }
+        if !oversized.is_empty() || !thin.is_empty() {
             return;
         }
         if let Some(m) = &p.mass

@@ -10,6 +10,14 @@ use std::path::{Component, Path, PathBuf};
 pub trait Loader {
     /// The text of the file at `path`, or why not.
     fn read(&self, path: &Path) -> Result<String, Unreadable>;
+
+    /// What makes two paths the same file (on disk: the path with every
+    /// link and `..` resolved), so that a file named on the command line
+    /// by its absolute path and `use`d by a relative one is loaded once;
+    /// `None` where the loader cannot tell (the path itself is used).
+    fn identity(&self, _path: &Path) -> Option<PathBuf> {
+        None
+    }
 }
 
 /// Why a source file could not be read.

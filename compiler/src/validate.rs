@@ -220,17 +220,21 @@ fn check_cell(cell: &Cell, errors: &mut Vec<Error>) {
                 by_mm: excess * 1000.0,
             });
         }
-        for t in &cell.slots[..i] {
+        // The first earlier slot too close, alone: one error per slot
+        // (20,000 slots written at one point made 200 million pairs,
+        // more than the machine's memory).
+        let close = cell.slots[..i].iter().find_map(|t| {
             let d = ((s.at[0] - t.at[0]).powi(2) + (s.at[1] - t.at[1]).powi(2)).sqrt();
-            if d < MIN_SLOT_DISTANCE {
-                errors.push(Error::SlotsOverlap {
-                    at: s.loc,
-                    first: t.loc,
-                    a: t.name.clone(),
-                    b: s.name.clone(),
-                    distance_mm: d * 1000.0,
-                });
-            }
+            (d < MIN_SLOT_DISTANCE).then_some((t, d))
+        });
+        if let Some((t, d)) = close {
+            errors.push(Error::SlotsOverlap {
+                at: s.loc,
+                first: t.loc,
+                a: t.name.clone(),
+                b: s.name.clone(),
+                distance_mm: d * 1000.0,
+            });
         }
         check_reach(cell, s.at, s.loc, format!("slot `{}`", s.name), errors);
     }
@@ -264,20 +268,20 @@ fn check_layout(
                 by_mm: excess * 1000.0,
             });
         }
-        for (j, other) in inv.entries.iter().enumerate() {
-            // Each pair once: against earlier entries, or any entry not checked.
-            if j == i || (j > i && checked(j)) {
-                continue;
-            }
-            let op = &m.products[other.product];
-            if fp.overlaps(&op.footprint(positions[j])) {
-                errors.push(Error::ProductsOverlap {
-                    at: locs[i],
-                    other: locs[j],
-                    a: product.name.clone(),
-                    b: op.name.clone(),
-                });
-            }
+        // Each pair once: against earlier entries, or any entry not
+        // checked; the first overlap alone (one error per product, not
+        // one per pair: 8,000 products at one spot made 32 million).
+        let overlapping = inv.entries.iter().enumerate().find(|&(j, other)| {
+            !(j == i || (j > i && checked(j)))
+                && fp.overlaps(&m.products[other.product].footprint(positions[j]))
+        });
+        if let Some((j, other)) = overlapping {
+            errors.push(Error::ProductsOverlap {
+                at: locs[i],
+                other: locs[j],
+                a: product.name.clone(),
+                b: m.products[other.product].name.clone(),
+            });
         }
         check_reach(
             cell,

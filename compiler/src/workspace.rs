@@ -118,6 +118,9 @@ impl fmt::Display for Task {
 pub struct Unreached {
     pub pose: Pose,
     pub tip: [f64; 3],
+    /// A pick the empty cell allows that the product itself blocks: with
+    /// the cup on its top face the wrist (over a short cup) meets it.
+    pub meets_itself: bool,
 }
 
 /// What the robot does at a release it reaches, where it can tell: how
@@ -290,6 +293,7 @@ impl Asker<'_> {
                 },
                 pose: u.pose,
                 tip: u.tip,
+                meets_itself: u.meets_itself,
             });
         }
         self.picked.insert(place, unreached.is_none());
@@ -320,6 +324,7 @@ impl Asker<'_> {
                 },
                 pose: u.pose,
                 tip: u.tip,
+                meets_itself: u.meets_itself,
             }),
             Ok(Released {
                 drop: Some(drop),
@@ -420,6 +425,7 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> (Vec<Error>, Vec<Warning>) {
                 },
                 pose: u.pose,
                 tip: u.tip,
+                meets_itself: u.meets_itself,
             });
         } else {
             started.insert(i);

@@ -140,6 +140,14 @@ impl SyntaxError {
                 "delete it: an invisible character, often pasted in with the text, is part of no statement"
                     .into(),
             ),
+            // A name written with a letter outside ASCII (`bänch`, `苹果`):
+            // the name stops before it.
+            SyntaxError::Unexpected { found, .. } if non_ascii_letter(found).is_some() => {
+                let c = non_ascii_letter(found).unwrap_or('?');
+                Some(format!(
+                    "names are written with ASCII letters, digits and `_` only (`bench_2`, `apple`): `{c}` is not one of them"
+                ))
+            }
             SyntaxError::Unexpected {
                 context, statement, ..
             } => Some(context.help(statement.as_deref())),
@@ -161,4 +169,10 @@ impl SyntaxError {
             )),
         }
     }
+}
+
+/// The letter outside ASCII that a found text (`` `änch` ``) starts with.
+fn non_ascii_letter(found: &str) -> Option<char> {
+    let c = found.strip_prefix('`')?.chars().next()?;
+    (c.is_alphabetic() && !c.is_ascii()).then_some(c)
 }

@@ -448,6 +448,18 @@ impl Checker {
             .collect();
     }
 
+    /// This checker with the product `p` standing too.
+    pub fn with_product(&self, p: &ProductBody) -> Checker {
+        let mut checker = self.clone();
+        checker.products.push(Obstacle::new(
+            Body::Product(p.name.clone()),
+            p.centre,
+            p.size.map(|v| v / 2.0),
+            p.yaw,
+        ));
+        checker
+    }
+
     /// `held`, just gripped where it stands, lifted off
     /// ([`Held::leaving_support`]) with its sides padded no more than the
     /// room to its nearest neighbour leaves, less [`LIFT_ROOM`], and no

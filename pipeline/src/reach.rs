@@ -92,7 +92,11 @@ fn pose(u: execute::Unreached) -> Unreached {
         (Stage::Placing, 2) => Pose::AboveSlot,
         (Stage::Placing, _) => Pose::Release,
     };
-    Unreached { pose, tip: u.tip }
+    Unreached {
+        pose,
+        tip: u.tip,
+        meets_itself: u.meets_itself,
+    }
 }
 
 /// What a raised release meets lower down, in the compiler's terms.
@@ -120,6 +124,7 @@ impl Workspace for RobotWorkspace {
             r.start().err().map(|tip| Unreached {
                 pose: Pose::Start,
                 tip,
+                meets_itself: false,
             })
         })
         .flatten()
@@ -194,6 +199,15 @@ mod tests {
         assert_eq!(
             packwright_compiler::HELD_ROOM,
             packwright_kinematics::body::HELD_PADDING
+        );
+    }
+
+    /// `check` refuses a product side the simulator cannot build (E025).
+    #[test]
+    fn the_compilers_thinnest_product_is_the_simulators() {
+        assert_eq!(
+            packwright_compiler::resolve::MIN_PRODUCT_SIZE,
+            packwright_sim::MIN_SIZE
         );
     }
 

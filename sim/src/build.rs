@@ -16,8 +16,8 @@ const FRICTION: f32 = 0.8;
 
 /// Largest coordinate or size accepted, metres (f32 keeps ~10 µm there).
 const MAX_COORD: f64 = 100.0;
-/// Smallest product dimension, metres.
-const MIN_SIZE: f64 = 0.001;
+/// Smallest product dimension, metres (`check` refuses less: E025).
+pub const MIN_SIZE: f64 = 0.001;
 /// Range of product masses, kilograms.
 const MIN_MASS: f64 = 1e-3;
 const MAX_MASS: f64 = 1e3;

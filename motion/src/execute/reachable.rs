@@ -37,6 +37,11 @@ pub struct Unreached {
     /// From 1, as in [`Failure::Unreachable`](packwright_interface::outcome::Failure).
     pub subgoal: usize,
     pub tip: [f64; 3],
+    /// A pick reached in the empty cell but not with the product itself
+    /// standing there: with the cup on its top face, a link (wrist 3 over
+    /// a cup shorter than the wrist is wide) or the cup's own body meets
+    /// it.
+    pub meets_itself: bool,
 }
 
 /// How the expert lets a product go in a slot it reaches.
@@ -124,16 +129,25 @@ impl Reachability {
         from: Option<&[Joints]>,
         load: Load,
     ) -> Vec<Joints> {
+        self.step_on(&self.checker, goal, heights, from, load)
+    }
+
+    /// [`Reachability::step`] with `checker`'s bodies.
+    fn step_on(
+        &self,
+        checker: &Checker,
+        goal: &SubGoal,
+        heights: &[f64],
+        from: Option<&[Joints]>,
+        load: Load,
+    ) -> Vec<Joints> {
         let joined = |q: &Joints| {
             from.is_none_or(|from| {
                 from.iter().any(|p| {
                     p.iter()
                         .zip(q)
                         .all(|(a, b)| (a - b).abs() <= MAX_DESCENT_TURN)
-                        && self
-                            .checker
-                            .check_motion(p, q, load.held, load.ignore)
-                            .is_none()
+                        && checker.check_motion(p, q, load.held, load.ignore).is_none()
                 })
             })
         };
@@ -141,9 +155,9 @@ impl Reachability {
             .iter()
             .map(|z| {
                 let tip = Point3::new(goal.tip[0], goal.tip[1], *z);
-                solutions(&self.checker, tip, 0.0, &self.near)
+                solutions(checker, tip, 0.0, &self.near)
                     .into_iter()
-                    .filter(|q| self.checker.check(q, load.held, load.ignore).is_none())
+                    .filter(|q| checker.check(q, load.held, load.ignore).is_none())
                     .filter(|q| joined(q))
                     .collect::<Vec<_>>()
             })
@@ -176,16 +190,25 @@ impl Reachability {
             .chain(lowerings(goals[2].tip[2], MAX_RAISES))
             .take_while(|z| *z >= goals[1].tip[2] + MIN_LIFT)
             .collect();
+        // The product stands where it is picked, as in `execute`: the cup
+        // may touch its top face, nothing else may meet it.
+        let itself = self.checker.with_product(&standing);
+        let touching = Load::picking(&standing.name);
         for (k, goal) in goals.iter().enumerate() {
             let reached = match k {
                 2 => self.lift(goal, &lowered, from.as_deref().unwrap_or(&[]), &lifting),
-                _ => self.step(goal, &[goal.tip[2]], from.as_deref(), Load::FREE),
+                _ => self.step_on(&itself, goal, &[goal.tip[2]], from.as_deref(), touching),
             };
             if reached.is_empty() {
+                let meets_itself = k < 2
+                    && !self
+                        .step(goal, &[goal.tip[2]], from.as_deref(), Load::FREE)
+                        .is_empty();
                 return Err(Unreached {
                     stage: Stage::Picking,
                     subgoal: k + 1,
                     tip: goal.tip,
+                    meets_itself,
                 });
             }
             from = Some(reached);
@@ -266,6 +289,7 @@ impl Reachability {
                 stage: Stage::Placing,
                 subgoal: 2,
                 tip: [f64::NAN; 3],
+                meets_itself: false,
             });
         };
         let lift = self.picking_goals(size, at)[2].tip;
@@ -319,6 +343,7 @@ impl Reachability {
                     stage: Stage::Placing,
                     subgoal: k + 1,
                     tip: goal.tip,
+                    meets_itself: false,
                 });
             }
             above = reached;
