@@ -94,10 +94,11 @@ pub fn arm_of(robot: &RobotRecord) -> Result<Arm> {
     match robot {
         RobotRecord::Ur10 => Ok(Arm::ur10()),
         RobotRecord::Urdf(path) => {
-            let text = std::fs::read_to_string(path).map_err(|e| PipelineError::Read {
-                path: path.into(),
-                reason: e.to_string(),
-            })?;
+            let text =
+                crate::regular::read_to_string(path.as_ref()).map_err(|e| PipelineError::Read {
+                    path: path.into(),
+                    reason: e.to_string(),
+                })?;
             let meshes = |filename: &str| read_mesh(Path::new(path), filename);
             from_urdf_with(&text, &meshes).map_err(|why| PipelineError::Urdf {
                 path: path.clone(),
@@ -139,7 +140,7 @@ fn read_mesh(urdf: &Path, filename: &str) -> Result<Vec<u8>, String> {
     } else {
         dir.join(filename)
     };
-    std::fs::read(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))
+    crate::regular::read(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))
 }
 
 /// The arm a cell packs with: its robot, with the cell's acceleration and

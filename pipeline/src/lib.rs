@@ -13,6 +13,7 @@ pub mod generate;
 pub mod models;
 pub mod motion_file;
 pub mod reach;
+pub mod regular;
 pub mod rehearse;
 pub mod replay;
 pub mod robot;

@@ -29,7 +29,7 @@ pub fn default_model() -> Result<Networks> {
 pub fn load_model(dir: &Path) -> Result<Networks> {
     let read = |name: &str| {
         let path = dir.join(name);
-        std::fs::read(&path).map_err(|e| PipelineError::Read {
+        crate::regular::read(&path).map_err(|e| PipelineError::Read {
             reason: format!("{e} (a model directory holds the files `packwright train` writes)"),
             path,
         })

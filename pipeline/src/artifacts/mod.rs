@@ -243,7 +243,7 @@ fn read_artifact<T: DeserializeOwned + Versioned>(path: &Path, expected: &str) -
 /// names the record (`[i]`, line `i + 1`) and the field in it.
 fn read_lines<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
     use std::io::BufRead;
-    let file = std::fs::File::open(path).map_err(|e| PipelineError::Read {
+    let file = crate::regular::open(path).map_err(|e| PipelineError::Read {
         path: path.to_owned(),
         reason: e.to_string(),
     })?;
@@ -273,7 +273,7 @@ fn read_lines<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
 }
 
 fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| PipelineError::Read {
+    crate::regular::read(path).map_err(|e| PipelineError::Read {
         path: path.to_owned(),
         reason: e.to_string(),
     })
