@@ -318,12 +318,22 @@ pub enum Shortfall {
     /// (a grip whose cup tip would miss the top face, by the policy's
     /// reach) or the slot (a release more than the success radius off).
     /// No motion is tried to it.
-    OffTarget { distance_m: f64 },
+    OffTarget { distance_m: f64, target: Target },
     /// A release raised over the expert's (the product drops the rest of
     /// the way) would drop the product onto its box's wall: it is `by_m`
     /// (horizontally) from letting go with the product inside the walls,
     /// more than a learned release is moved.
     OverWall { by_m: f64 },
+}
+
+/// What a learned grip or release must be near ([`Shortfall::OffTarget`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Target {
+    /// A grip: the product's top face, about its centre.
+    TopFace,
+    /// A release: the slot.
+    Slot,
 }
 
 impl Shortfall {
@@ -368,9 +378,20 @@ impl fmt::Display for Shortfall {
                 write!(f, "the smoother refused the policy's steps ({reason})")
             }
             Shortfall::Collides { hit } => write!(f, "the policy's motion would collide ({hit})"),
-            Shortfall::OffTarget { distance_m } => write!(
+            Shortfall::OffTarget {
+                distance_m,
+                target: Target::TopFace,
+            } => write!(
                 f,
-                "the learned sub-goal is {:.1} mm off the product's centre (the cup would miss its top face) or the slot (more than the success radius)",
+                "the learned grip is {:.1} mm off the product's centre: the cup would miss its top face, or grip too near its edge",
+                distance_m * 1e3
+            ),
+            Shortfall::OffTarget {
+                distance_m,
+                target: Target::Slot,
+            } => write!(
+                f,
+                "the learned release is {:.1} mm off the slot, more than the success radius",
                 distance_m * 1e3
             ),
             Shortfall::OverWall { by_m } => write!(

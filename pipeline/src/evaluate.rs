@@ -145,6 +145,15 @@ pub struct CaseFailure {
     pub why: String,
 }
 
+/// A scenario in which the learned planner fell back, and each fallback's
+/// kind ("placing 2: limits"), whether it packed or not: where to look
+/// with `execute --scenario`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CaseFallbacks {
+    pub scenario: String,
+    pub kinds: Vec<String>,
+}
+
 /// One suite × planner.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Row {
@@ -168,6 +177,8 @@ pub struct Row {
     pub fallbacks_per_package: Option<f64>,
     /// Fallbacks by kind ("placing 3: short").
     pub fallback_kinds: BTreeMap<String, usize>,
+    /// The scenarios with fallbacks (`--json` only).
+    pub fallback_scenarios: Vec<CaseFallbacks>,
     pub violations: usize,
     pub decision_us: Spread,
     pub subgoal_us: Spread,
@@ -258,6 +269,14 @@ impl Row {
                 runs.iter().map(|(_, r)| r.fallbacks.len()).sum::<usize>() as f64 / n as f64
             }),
             fallback_kinds: kinds,
+            fallback_scenarios: runs
+                .iter()
+                .filter(|(_, r)| !r.fallbacks.is_empty())
+                .map(|(name, r)| CaseFallbacks {
+                    scenario: (*name).to_owned(),
+                    kinds: r.fallbacks.iter().map(ToString::to_string).collect(),
+                })
+                .collect(),
             violations: runs.iter().map(|(_, r)| r.violations).sum(),
             decision_us: Spread::of(&all(|t| &t.decision_us)),
             subgoal_us: Spread::of(&all(|t| &t.subgoal_us)),
@@ -385,5 +404,35 @@ mod tests {
         let kinds: Vec<_> = rrt.subgoal_us_by_kind.keys().copied().collect();
         assert_eq!(kinds, [Hover, Release]);
         assert_eq!(rrt.subgoal_us_by_kind[&Hover].median, Some(50.0));
+    }
+
+    use packwright_interface::Stage;
+
+    /// The learned row names each scenario that fell back, with its
+    /// fallbacks' kinds; one without fallbacks is not listed.
+    #[test]
+    fn scenarios_that_fell_back_are_named() {
+        let short = FallbackKind {
+            stage: Stage::Placing,
+            subgoal: 2,
+            why: "short",
+        };
+        let mut fell = run(&[]);
+        fell.fallbacks = vec![short, short];
+        let case = |name: &str, run: Run| CaseResult {
+            name: name.to_owned(),
+            reasoner: None,
+            runs: vec![(PlannerKind::Learned, run)],
+        };
+        let cases = [case("s/01", run(&[])), case("s/02", fell)];
+        let row = Row::of("s", "c", None, PlannerKind::Learned, None, &cases);
+        assert_eq!(
+            row.fallback_scenarios,
+            [CaseFallbacks {
+                scenario: "s/02".into(),
+                kinds: vec!["placing 2: short".into(); 2],
+            }]
+        );
+        assert_eq!(row.fallbacks_per_package, Some(1.0));
     }
 }

@@ -52,6 +52,9 @@ pub struct Lesson {
     /// share products with other cells, whose demonstrations order them
     /// too, and their own break no rule taught with those; with that rule.
     pub read_otherwise: Vec<(String, SequenceRule)>,
+    /// Other rules the demonstrations follow as well, when they show few
+    /// pairs of products in order ([`Inferred::rivals`]).
+    pub rivals: Vec<SequenceRule>,
 }
 
 /// The expert's replays of a lesson's demonstrations.
@@ -194,10 +197,12 @@ impl Lesson {
         let Inferred {
             rule: sequence,
             exceptions,
+            rivals,
         } = if ordered.is_empty() {
             Inferred {
                 rule: SequenceRule::Ascending,
                 exceptions: Vec::new(),
+                rivals: Vec::new(),
             }
         } else {
             let shown: Vec<DemonstrationRecord> =
@@ -249,6 +254,7 @@ impl Lesson {
                         Inferred {
                             rule,
                             exceptions: Vec::new(),
+                            rivals: Vec::new(),
                         },
                         true,
                     )
@@ -283,6 +289,12 @@ impl Lesson {
             Inferred {
                 exceptions: exceptions.iter().map(|&e| ordered[e]).collect(),
                 rule: inferred.rule,
+                // One rule over several cells: said for one cell's alone.
+                rivals: if cells.len() == 1 {
+                    inferred.rivals
+                } else {
+                    Vec::new()
+                },
             }
         };
         for &k in &any_order {
@@ -301,6 +313,7 @@ impl Lesson {
             rehearsals,
             cell_rules,
             read_otherwise,
+            rivals,
         })
     }
 
@@ -575,7 +588,18 @@ pub struct Inferred {
     /// reported by `train`, and their decisions left out of the reasoner's
     /// examples.
     pub exceptions: Vec<usize>,
+    /// Rules the demonstrations follow as well, where they show fewer
+    /// than [`FEW_PAIRS`] pairs of products and neither a direction nor
+    /// a priority was declared: each orders some of the products no
+    /// demonstration shows together otherwise than `rule` (one
+    /// hand-written demonstration of two products taught `descending`
+    /// where the line packs by a priority list that put those two so).
+    pub rivals: Vec<SequenceRule>,
 }
+
+/// Fewer pairs of products shown in order than this, and a rule read
+/// from them is said to rest on them ([`Inferred::rivals`]).
+pub const FEW_PAIRS: usize = 3;
 
 /// The sequence rule the demonstrations of `cell` in a compilation
 /// follow, or `None` when it holds none of that cell: the order a model
@@ -816,23 +840,49 @@ pub fn sequence_rule(
     if let (Some(rule), None) = (directions.next(), directions.next()) {
         let exceptions = breaking(&rule);
         if explains_majority(demos.len() - exceptions.len(), demos.len()) {
-            return Ok(Inferred { rule, exceptions });
+            return Ok(Inferred {
+                rule,
+                exceptions,
+                rivals: Vec::new(),
+            });
         }
     }
     let mut best: Option<Inferred> = None;
-    for rule in candidates {
+    for rule in candidates.clone() {
         let exceptions = breaking(&rule);
         if best
             .as_ref()
             .is_none_or(|b| exceptions.len() < b.exceptions.len())
         {
-            best = Some(Inferred { rule, exceptions });
+            best = Some(Inferred {
+                rule,
+                exceptions,
+                rivals: Vec::new(),
+            });
         }
     }
-    let best = best.unwrap_or(Inferred {
+    let mut best = best.unwrap_or(Inferred {
         rule: SequenceRule::Ascending,
         exceptions: Vec::new(),
+        rivals: Vec::new(),
     });
+    // The pairs of products the demonstrations put in an order.
+    let pairs: BTreeSet<(&str, &str)> = votes
+        .keys()
+        .map(|&(a, b)| if a < b { (a, b) } else { (b, a) })
+        .collect();
+    if declared.is_empty() && pairs.len() < FEW_PAIRS {
+        best.rivals = candidates
+            .into_iter()
+            .filter(|r| {
+                *r != best.rule
+                    && breaking(r).len() == best.exceptions.len()
+                    && inventories
+                        .iter()
+                        .any(|inv| r.chain(inv) != best.rule.chain(inv))
+            })
+            .collect();
+    }
     let agree = demos.len() - best.exceptions.len();
     if !explains_majority(agree, demos.len()) {
         // Numbered within its block, from 1 (a block's demonstrations
@@ -1045,6 +1095,39 @@ inventory inv for c {{
         let loader = MemoryLoader::new().with("rule.pack", text);
         check(&loader, &["rule.pack".into()], &Anywhere)
             .unwrap_or_else(|f| panic!("{}", f.render()))
+    }
+
+    /// One hand-written demonstration of two products, against the
+    /// inventory's order: `descending` follows it, and so does the
+    /// inventory order with those two swapped, which orders the products
+    /// it does not show otherwise; both are said. Three pairs shown, or a
+    /// declared direction, and the rule stands alone.
+    #[test]
+    fn a_rule_read_from_few_pairs_names_the_others_that_fit() {
+        let one = "order o1 for inv { p3 -> s1
+  p2 -> s2 }
+demo o1_seen for o1 { sequence p3, p2 }";
+        let inferred = rule_of(one).ok().flatten().expect("a rule");
+        assert_eq!(inferred.rule, SequenceRule::Descending);
+        let swapped = ["p1", "p3", "p2", "p4", "p5", "p6"]
+            .map(String::from)
+            .to_vec();
+        assert_eq!(inferred.rivals, [SequenceRule::Listed(swapped)]);
+        let three = "order o1 for inv { p3 -> s1
+  p2 -> s2
+  p1 -> s3 }
+demo o1_seen for o1 { sequence p3, p2, p1 }";
+        let inferred = rule_of(three).ok().flatten().expect("a rule");
+        assert_eq!(inferred.rule, SequenceRule::Descending);
+        assert!(inferred.rivals.is_empty(), "{:?}", inferred.rivals);
+        let declared = "demos d for inv {
+  choose 2 of p2, p3 into s1, s2
+  sequence descending
+  seed 1
+}";
+        let inferred = rule_of(declared).ok().flatten().expect("a rule");
+        assert_eq!(inferred.rule, SequenceRule::Descending);
+        assert!(inferred.rivals.is_empty(), "{:?}", inferred.rivals);
     }
 
     /// A generated block declares `sequence descending`, and one

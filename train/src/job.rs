@@ -89,6 +89,15 @@ pub enum Weakness {
         alone: packwright_interface::SequenceRule,
         taught: packwright_interface::SequenceRule,
     },
+    /// The taught rule rests on fewer than
+    /// [`FEW_PAIRS`](packwright_pipeline::teach::FEW_PAIRS) pairs of
+    /// products shown in order: the `rivals` follow the demonstrations as
+    /// well and order the products no demonstration shows together
+    /// otherwise.
+    RuleFromFewPairs {
+        taught: packwright_interface::SequenceRule,
+        rivals: Vec<packwright_interface::SequenceRule>,
+    },
     /// Demonstrations that break the taught sequence rule (their
     /// decisions were left out of the reasoner's examples).
     SequenceExceptions {
@@ -141,6 +150,16 @@ impl std::fmt::Display for Weakness {
             } => write!(
                 f,
                 "cell `{cell}`'s demonstrations alone follow the order {alone}; it shares products with the other cells taught, whose demonstrations order them too, so the model follows the order taught over all of them there, {taught}: train the cell on its own (`--demos`) to keep its order"
+            ),
+            Weakness::RuleFromFewPairs { taught, rivals } => write!(
+                f,
+                "the demonstrations put fewer than {} pairs of products in an order, and other orders follow them as well ({}): the model keeps {taught}. If the line packs otherwise, show it in a demonstration that orders products these disagree on, or declare it in a `demos` block (`sequence ascending`, `descending`, or `listed` with the `choose` list in priority order)",
+                packwright_pipeline::teach::FEW_PAIRS,
+                rivals
+                    .iter()
+                    .map(ToString::to_string)
+                    .collect::<Vec<_>>()
+                    .join("; ")
             ),
             Weakness::SequenceExceptions {
                 exceptions,
@@ -279,6 +298,12 @@ pub fn run(
             cell: cell.clone(),
             alone: alone.clone(),
             taught: lesson.sequence.clone(),
+        });
+    }
+    if !lesson.rivals.is_empty() {
+        warnings.push(Weakness::RuleFromFewPairs {
+            taught: lesson.sequence.clone(),
+            rivals: lesson.rivals.clone(),
         });
     }
     if let Some(&first) = lesson.exceptions.first() {

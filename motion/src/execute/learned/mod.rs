@@ -34,7 +34,7 @@ use guards::{
 use nalgebra::Vector3;
 use packwright_interface::outcome::{
     Failure, Fallback, Hit, Outcome, PlannerKind, ProductReport, Report, Shortfall, Stage,
-    SubGoalKind, Violation,
+    SubGoalKind, Target, Violation,
 };
 use packwright_interface::{Body, Graph, OrderTask, Policy, SequenceRule, SubGoalQuery, World};
 use packwright_kinematics::body::wrist_around_tool;
@@ -987,7 +987,13 @@ impl<W: World> Learned<'_, W> {
                 }
                 other => 'fell: {
                     let why = match (fallen, off, other) {
-                        (false, Some(distance_m), _) => Some(Shortfall::OffTarget { distance_m }),
+                        (false, Some(distance_m), _) => Some(Shortfall::OffTarget {
+                            distance_m,
+                            target: match switch {
+                                Suction::On => Target::TopFace,
+                                _ => Target::Slot,
+                            },
+                        }),
                         (_, _, Some(Err(why))) => Some(why),
                         _ => None,
                     };
