@@ -47,6 +47,20 @@ impl From<Exit> for ExitCode {
     }
 }
 
+/// An error after a command printed its `--json` report on stdout (a
+/// picture or table that could not be written): said on stderr only, so
+/// that stdout stays one JSON document.
+#[derive(Debug)]
+pub struct AfterReport(pub anyhow::Error);
+
+impl std::fmt::Display for AfterReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:#}", self.0)
+    }
+}
+
+impl std::error::Error for AfterReport {}
+
 pub fn run(cli: cli::Cli) -> anyhow::Result<Exit> {
     match cli.command {
         cli::Command::Check(args) => commands::check::run(&args),

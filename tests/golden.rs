@@ -260,6 +260,22 @@ fn exit_codes_and_json_lines() {
     assert!(text(&missing.stderr).contains("no such file"));
     let usage = packwright(&["check"]);
     assert_eq!(usage.status.code(), Some(2));
+    assert!(usage.stdout.is_empty());
+    // With `--json`, a usage error is JSON on stdout too.
+    let usage = packwright(&["eval", "orders/suites/teach.pack", "--limit", "0", "--json"]);
+    assert_eq!(usage.status.code(), Some(2));
+    let said: serde_json::Value =
+        serde_json::from_slice(&usage.stdout).expect("one JSON document on stdout");
+    assert_eq!(said["type"], "error");
+    assert!(
+        said["message"]
+            .as_str()
+            .is_some_and(|m| m.contains("--limit")),
+        "{said}"
+    );
+    let help = packwright(&["check", "--help"]);
+    assert_eq!(help.status.code(), Some(0));
+    assert!(text(&help.stdout).contains("Usage"));
 
     // A .pack file where a compiled directory is read, and the other way
     // round: exit 2 and what to give instead.

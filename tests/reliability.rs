@@ -491,6 +491,23 @@ fn eval_prints_what_it_measured_before_writing_its_files() {
     let out = args(&blocked.join("table.md").display().to_string());
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stdout).contains("m_case1_2of3"));
+    // With `--json`, stdout stays the one report; the write's error is on
+    // stderr.
+    let out = packwright(&[
+        "eval",
+        "orders/suites/measure.pack",
+        "--suite",
+        "m_case1_2of3",
+        "--limit",
+        "1",
+        "--json",
+        "--markdown",
+        &blocked.join("table.md").display().to_string(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
+    assert_eq!(report["rows"][0]["suite"], "m_case1_2of3");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("error:"));
     let out = packwright(&[
         "eval",
         "orders/suites/measure.pack",

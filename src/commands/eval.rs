@@ -247,12 +247,16 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<Exit> {
     }
     // Written after the results are printed: a path that cannot be
     // written loses nothing the run measured.
-    if let Some(dir) = &args.plots {
-        write_plots(dir, &rows, &all_results)?;
-    }
-    if let Some(path) = &args.markdown {
-        write_file_atomically(path, table.as_bytes())?;
-    }
+    let written = || -> anyhow::Result<()> {
+        if let Some(dir) = &args.plots {
+            write_plots(dir, &rows, &all_results)?;
+        }
+        if let Some(path) = &args.markdown {
+            write_file_atomically(path, table.as_bytes())?;
+        }
+        Ok(())
+    };
+    written().map_err(crate::AfterReport)?;
     Ok(Exit::Success)
 }
 

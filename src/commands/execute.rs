@@ -151,7 +151,8 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
             &ep.arm,
             &entries.cycles,
             &report,
-        )?;
+        )
+        .map_err(crate::AfterReport)?;
     }
     if let Some(path) = &args.record {
         let title = format!("{name} ({})", report.planner);
@@ -171,7 +172,7 @@ pub fn run(args: &ExecuteArgs) -> anyhow::Result<Exit> {
                 .as_ref()
                 .map(|_| &score as packwright_recording::Scorer),
         };
-        write_recording(path, &[run])?;
+        write_recording(path, &[run]).map_err(crate::AfterReport)?;
         errln!("wrote {}", path.display());
     }
     Ok(exit)
