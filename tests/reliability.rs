@@ -463,8 +463,8 @@ fn eval_refuses_a_model_it_cannot_use_before_running_anything() {
 fn eval_prints_what_it_measured_before_writing_its_files() {
     let dir = scratch("reliability", "eval-markdown");
     let md = dir.join("not").join("yet").join("table.md");
-    let args = |md: &str| {
-        packwright(&[
+    let args = |md: &str, json: bool| {
+        let mut args = vec![
             "eval",
             "orders/suites/measure.pack",
             "--suite",
@@ -473,9 +473,13 @@ fn eval_prints_what_it_measured_before_writing_its_files() {
             "1",
             "--markdown",
             md,
-        ])
+        ];
+        if json {
+            args.push("--json");
+        }
+        packwright(&args)
     };
-    let out = args(&md.display().to_string());
+    let out = args(&md.display().to_string(), false);
     assert_eq!(
         out.status.code(),
         Some(0),
@@ -488,22 +492,13 @@ fn eval_prints_what_it_measured_before_writing_its_files() {
     // is out.
     let blocked = dir.join("file");
     fs::write(&blocked, "a file").expect("written");
-    let out = args(&blocked.join("table.md").display().to_string());
+    let unwritable = blocked.join("table.md").display().to_string();
+    let out = args(&unwritable, false);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stdout).contains("m_case1_2of3"));
     // With `--json`, stdout stays the one report; the write's error is on
     // stderr.
-    let out = packwright(&[
-        "eval",
-        "orders/suites/measure.pack",
-        "--suite",
-        "m_case1_2of3",
-        "--limit",
-        "1",
-        "--json",
-        "--markdown",
-        &blocked.join("table.md").display().to_string(),
-    ]);
+    let out = args(&unwritable, true);
     assert_eq!(out.status.code(), Some(2));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
     assert_eq!(report["rows"][0]["suite"], "m_case1_2of3");
