@@ -56,8 +56,14 @@ pub enum UrdfError {
         lower: f64,
         upper: f64,
     },
-    #[error("robot description: joint `{joint}` needs a <limit> with a positive finite velocity")]
-    Velocity { joint: String },
+    #[error(
+        "robot description: joint `{joint}` needs a <limit> velocity of at least {min} rad/s, not {velocity}: URDF velocities are in rad/s (the UR10's are 2.09 to 3.14)"
+    )]
+    Velocity {
+        joint: String,
+        velocity: f64,
+        min: f64,
+    },
     /// A collision mesh that cannot be read or used.
     #[error(
         "robot description: link `{link}`: collision mesh `{file}`: {reason}. packwright bounds each collision mesh by a box or a capsule, so it reads the file (STL or OBJ, relative to the description, `package://` through ROS_PACKAGE_PATH or the description's folders); or describe the link by <box>, <cylinder>, <sphere> or <capsule>"

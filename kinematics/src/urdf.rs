@@ -383,6 +383,12 @@ fn pose(p: &Pose, what: &str) -> Result<Isometry3<f64>, UrdfError> {
     ))
 }
 
+/// The slowest joint velocity limit accepted (rad/s): slower, a joint
+/// takes minutes per motion and the smoother gives up (a URDF with
+/// `velocity="0.0001"` passed `check` and `execute` printed the
+/// smoother's raw input).
+pub const MIN_VELOCITY: f64 = 0.01;
+
 fn limits(joint: &urdf_rs::Joint) -> Result<Limits, UrdfError> {
     let l = &joint.limit;
     let name = &joint.name;
@@ -397,9 +403,11 @@ fn limits(joint: &urdf_rs::Joint) -> Result<Limits, UrdfError> {
     } else {
         (l.lower, l.upper)
     };
-    if !(l.velocity.is_finite() && l.velocity > 0.0) {
+    if !(l.velocity.is_finite() && l.velocity >= MIN_VELOCITY) {
         return Err(UrdfError::Velocity {
             joint: name.clone(),
+            velocity: l.velocity,
+            min: MIN_VELOCITY,
         });
     }
     let positive = |v: f64, default: f64| if v.is_finite() && v > 0.0 { v } else { default };

@@ -260,6 +260,18 @@ fn unusable_descriptions_are_rejected_with_reasons() {
     let msg = rejected(&unlimited);
     assert!(msg.contains("`elbow_joint` needs a <limit>"), "{msg}");
 
+    // A velocity far too slow to move (a unit slip): refused, with the
+    // unit said, not left to the smoother.
+    let crawling = edited(
+        r#"velocity="3.141592653589793" acceleration"#,
+        r#"velocity="0.0001" acceleration"#,
+    );
+    let msg = rejected(&crawling);
+    assert!(
+        msg.contains("velocity of at least 0.01 rad/s, not 0.0001"),
+        "{msg}"
+    );
+
     let two_roots = edited(
         r#"<link name="tool0"/>"#,
         r#"<link name="tool0"/><link name="stray"/>"#,
