@@ -234,14 +234,14 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         }
         _ => path,
     };
-    if let Ok(m) = fs::metadata(path) {
-        if m.is_dir() {
-            bail!("{} is a directory, not a file", path.display());
-        }
-        if !m.is_file() {
-            return write_in_place(path, bytes);
-        }
+    // (Not a device or pipe: the first check above saw where the path
+    // leads.) A file replaced keeps its permissions (`fmt` of a 0640
+    // file).
+    let existing = fs::metadata(path).ok();
+    if existing.as_ref().is_some_and(fs::Metadata::is_dir) {
+        bail!("{} is a directory, not a file", path.display());
     }
+    let kept = existing.map(|m| m.permissions());
     // A missing parent directory is made, as `compile` makes its output
     // directory's.
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty())
@@ -253,8 +253,6 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     remove_stale_siblings(path);
     let tmp = sibling(path, "tmp");
     writing(&tmp);
-    // A file replaced keeps its permissions (`fmt` of a 0640 file).
-    let kept = fs::metadata(path).ok().map(|m| m.permissions());
     let replaced = write_synced(&tmp, bytes)
         .and_then(|()| match kept {
             Some(p) => fs::set_permissions(&tmp, p)

@@ -847,40 +847,46 @@ pub fn sequence_rule(
             });
         }
     }
-    let mut best: Option<Inferred> = None;
-    for rule in candidates.clone() {
-        let exceptions = breaking(&rule);
-        if best
-            .as_ref()
-            .is_none_or(|b| exceptions.len() < b.exceptions.len())
-        {
-            best = Some(Inferred {
-                rule,
-                exceptions,
+    // Each candidate with the demonstrations that break it; the first
+    // that fewest break is the rule.
+    let scored: Vec<(SequenceRule, Vec<usize>)> = candidates
+        .into_iter()
+        .map(|rule| {
+            let exceptions = breaking(&rule);
+            (rule, exceptions)
+        })
+        .collect();
+    let mut best = scored
+        .iter()
+        .min_by_key(|(_, exceptions)| exceptions.len())
+        .map_or(
+            Inferred {
+                rule: SequenceRule::Ascending,
+                exceptions: Vec::new(),
                 rivals: Vec::new(),
-            });
-        }
-    }
-    let mut best = best.unwrap_or(Inferred {
-        rule: SequenceRule::Ascending,
-        exceptions: Vec::new(),
-        rivals: Vec::new(),
-    });
+            },
+            |(rule, exceptions)| Inferred {
+                rule: rule.clone(),
+                exceptions: exceptions.clone(),
+                rivals: Vec::new(),
+            },
+        );
     // The pairs of products the demonstrations put in an order.
     let pairs: BTreeSet<(&str, &str)> = votes
         .keys()
         .map(|&(a, b)| if a < b { (a, b) } else { (b, a) })
         .collect();
     if declared.is_empty() && pairs.len() < FEW_PAIRS {
-        best.rivals = candidates
+        best.rivals = scored
             .into_iter()
-            .filter(|r| {
+            .filter(|(r, exceptions)| {
                 *r != best.rule
-                    && breaking(r).len() == best.exceptions.len()
+                    && exceptions.len() == best.exceptions.len()
                     && inventories
                         .iter()
                         .any(|inv| r.chain(inv) != best.rule.chain(inv))
             })
+            .map(|(r, _)| r)
             .collect();
     }
     let agree = demos.len() - best.exceptions.len();
