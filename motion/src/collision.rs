@@ -248,6 +248,12 @@ pub struct Held {
 /// the padding ([`Checker::lifting`]).
 pub const LIFT_ROOM: f64 = 0.0005;
 
+/// The room kept between a lowered product's padded sides and the nearest
+/// wall or product beside its slot ([`Checker::lowering`]): the release
+/// is reached within half a millimetre, and as much again is left for
+/// rounding and the flange's small tilt.
+pub const LOWER_ROOM: f64 = 0.001;
+
 /// How near (m) a standing product's footprint must come to a carried
 /// product's for [`Checker::above_neighbours`] to ask that the carried one
 /// hang above it.
@@ -525,6 +531,29 @@ impl Checker {
                     && o.aabb.mins.y < hi.y + near
             })
             .all(|o| o.top < f64::from(lo.z))
+    }
+
+    /// `held`, carried down into its slot (the release): its sides padded
+    /// no more than the room between it, standing at `centre` turned by
+    /// `yaw`, and the nearest wall or product beside it leaves, less
+    /// [`LOWER_ROOM`], and no less than [`MIN_SIDE_PAD`]. A snug slot
+    /// (a tray 86 mm deep in a crate 90 mm inside) has less room than the
+    /// full padding, which then kept every planner's release above the
+    /// rim: the product dropped the box's depth and landed tilted.
+    pub fn lowering(&self, held: Held, centre: [f64; 3], yaw: f64) -> Held {
+        let at = Obstacle::new(
+            Body::Product(held.name.clone()),
+            centre,
+            held.size.map(|v| v / 2.0),
+            yaw,
+        );
+        let room = self.room_round(&at, &held.name);
+        let side_pad =
+            (room - LOWER_ROOM).clamp(MIN_SIDE_PAD.min(self.held_padding), self.held_padding);
+        Held {
+            side_pad,
+            ..held.carried()
+        }
     }
 
     /// The distance from a standing product's box `at` to the nearest
@@ -1250,6 +1279,67 @@ mod tests {
         }]);
         let side = only_a.lifting(elsewhere, Some(&at)).side_pad;
         assert!((side - (0.0015 - LIFT_ROOM)).abs() < 1e-6, "{side}");
+    }
+
+    /// A tray 287 mm deep let go in a box 292 mm deep inside (2.5 mm each
+    /// side): padded all round, the release collides, and every planner
+    /// let it go above the rim; lowered ([`Checker::lowering`]), its
+    /// sides are padded by the room less [`LOWER_ROOM`], and the release
+    /// and the last 3 cm down to it are free. With room to spare the padding stays whole; a product
+    /// already packed beside the slot counts as a wall does.
+    #[test]
+    fn a_product_lowered_into_a_snug_slot_is_padded_with_the_room_it_has() {
+        use crate::execute::{Load, reach};
+        use crate::expert::released_centre;
+        use nalgebra::Point3;
+        use packwright_kinematics::body::BOX_WALL;
+        use std::f64::consts::FRAC_PI_2;
+        let arm = Arm::ur10();
+        let size = [0.05, 0.287, 0.03];
+        let slot = [0.0, 0.65];
+        let mut checker = Checker::new(&arm, &cell());
+        let held = Held::under_cup("T", size, 0.1, Vector3::zeros());
+        let lowered = checker.lowering(held.clone(), released_centre(slot, size[2]), 0.0);
+        let room = (0.3 - 2.0 * BOX_WALL - size[1]) / 2.0;
+        assert!(
+            (lowered.side_pad - (room - LOWER_ROOM)).abs() < 1e-6,
+            "{}",
+            lowered.side_pad
+        );
+        assert!(!lowered.leaving_support);
+        let ready =
+            arm.from_ur_convention(&[0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0]);
+        let tip = |z: f64| Point3::new(slot[0], slot[1], z);
+        let release = released_centre(slot, size[2])[2] + size[2] / 2.0;
+        let down = Load::holding(&lowered);
+        let above = reach(&checker, tip(release + 0.03), 0.0, &ready, down).expect("in the box");
+        let at = reach(&checker, tip(release), 0.0, &above, down).expect("the release, lowered");
+        assert_eq!(
+            checker.check_motion(&above, &at, Some(&lowered), None),
+            None
+        );
+        assert!(
+            checker.check(&at, Some(&held), None).is_some(),
+            "padded all round, the release is free: a weak test"
+        );
+        // A narrow product: the whole padding.
+        let narrow = Held::under_cup("N", [0.05, 0.2, 0.03], 0.1, Vector3::zeros());
+        let side = checker
+            .lowering(narrow, released_centre(slot, 0.03), 0.0)
+            .side_pad;
+        assert_eq!(side, HELD_PADDING);
+        // A product packed 2 mm beside the slot: the room to it counts.
+        checker.set_products(&[ProductBody {
+            name: "P".into(),
+            centre: [0.05 + 0.002, 0.65, 0.02],
+            size: [0.05, 0.05, 0.04],
+            yaw: 0.0,
+        }]);
+        let narrow = Held::under_cup("N", [0.05, 0.2, 0.03], 0.1, Vector3::zeros());
+        let side = checker
+            .lowering(narrow, released_centre(slot, 0.03), 0.0)
+            .side_pad;
+        assert!((side - (0.002 - LOWER_ROOM)).abs() < 1e-6, "{side}");
     }
 
     /// A product carried up from beside a taller neighbour 4 mm away hangs

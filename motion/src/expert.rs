@@ -147,6 +147,12 @@ pub fn release_at(cell: &CellScene, slot: &SlotSpec, size: [f64; 3]) -> [f64; 2]
     })
 }
 
+/// Where a product `height` tall stands (its centre) as the expert lets it
+/// go over `slot` ([`release_at`]): [`RELEASE_GAP`] over the floor.
+pub fn released_centre(slot: [f64; 2], height: f64) -> [f64; 3] {
+    [slot[0], slot[1], RELEASE_GAP + height / 2.0]
+}
+
 /// The box a slot belongs to, and its height.
 pub fn box_height(cell: &CellScene, slot: usize) -> f64 {
     cell.slots

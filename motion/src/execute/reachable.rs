@@ -302,6 +302,12 @@ impl Reachability {
         );
         let held = Held::under_cup("held", size, self.cell.suction, Vector3::zeros());
         let load = Load::holding(&held);
+        // Down into the slot, padded as the room beside it allows.
+        let slot_at = expert::release_at(&self.cell, spec, size);
+        let lowered =
+            self.checker
+                .lowering(held.clone(), expert::released_centre(slot_at, size[2]), 0.0);
+        let lowering = Load::holding(&lowered);
         let ceiling = goals[1].tip[2];
         let raised: Vec<f64> = std::iter::once(goals[2].tip[2])
             .chain(raises(goals[2].tip[2], MAX_RAISES))
@@ -324,14 +330,14 @@ impl Reachability {
                 2 => raised
                     .iter()
                     .find_map(|&z| {
-                        let free = self.step(goal, &[z], Some(&above), load);
+                        let free = self.step(goal, &[z], Some(&above), lowering);
                         (!free.is_empty()).then_some((z, free))
                     })
                     .map(|(z, free)| {
                         let raise = z - goal.tip[2];
                         release.drop = expert::RELEASE_GAP + raise;
                         if raise > 1e-9 {
-                            release.lower = self.met_at(goal, &above, load);
+                            release.lower = self.met_at(goal, &above, lowering);
                         }
                         free
                     })

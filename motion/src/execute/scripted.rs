@@ -351,15 +351,21 @@ impl<W: World> Scripted<'_, W> {
         self.station.sync_products(&obs);
         let carrying = Load::holding(&held);
         // Placing the product square in its slot: yaw 0 (it turns with the cup).
+        // Down into the slot, padded as the room beside it allows.
+        let lowered =
+            self.station
+                .checker
+                .lowering(held.clone(), expert::released_centre(slot, h), 0.0);
+        let loads = [carrying, carrying, Load::holding(&lowered)];
         let from = leg_end(&lift).unwrap_or(obs.joints);
-        let plan = match self.plan_stage(from, &placing, 0.0, [carrying; 3]) {
+        let plan = match self.plan_stage(from, &placing, 0.0, loads) {
             Ok(plan) => plan,
             // No free way down into the slot from the point above it in
             // the arm's shape nearest where it is: the point above the
             // slot in the release's shape ([`Station::release_shape`]).
-            Err(why) if shape_blocked(&why, 3) => self
-                .release_stage(from, &placing, [carrying; 3])
-                .ok_or(why)?,
+            Err(why) if shape_blocked(&why, 3) => {
+                self.release_stage(from, &placing, loads).ok_or(why)?
+            }
             Err(why) => return Err(why),
         };
         let place = StageInfo {
@@ -368,7 +374,7 @@ impl<W: World> Scripted<'_, W> {
             label: s as u32 + 1,
             height: h,
         };
-        self.run_stage(plan, 0.0, [carrying; 3], Some(place), lift, false)?;
+        self.run_stage(plan, 0.0, loads, Some(place), lift, false)?;
 
         // Back up from the released product, which the checker now sees
         // where it lies (its last observed place was under the cup).

@@ -279,6 +279,9 @@ const KEPT_MARGIN: f64 = 2.0 * BACK_UP_REACHED;
 // A kept product stands as far inside the walls as the expert lets one go
 // (`expert::release_at`): the two rooms are one.
 const _: () = assert!(crate::expert::WALL_ROOM == HELD_PADDING + KEPT_MARGIN);
+// A product lowered into a snug slot is padded as the room leaves less
+// this (`Checker::lowering`): a release kept inside there fits.
+const _: () = assert!(crate::collision::LOWER_ROOM == KEPT_MARGIN);
 
 /// Whether `rolled` is a release (`switch`) whose motion would collide.
 pub(super) fn release_collides(switch: Suction, rolled: &Result<Route, Shortfall>) -> bool {
@@ -336,14 +339,17 @@ impl Wrist {
 
 impl Inside {
     /// For a product of `size` hanging `grip` (world x, y: its centre
-    /// minus the cup tip) from a flange turned by `flange`, let go in
-    /// `cell`'s box `b`.
+    /// minus the cup tip) from a flange turned by `flange`, its sides
+    /// padded by `side_pad` (no more than [`HELD_PADDING`]: the checker's
+    /// padding going down into the slot, [`Checker::lowering`](crate::collision::Checker::lowering)), let go
+    /// in `cell`'s box `b`.
     pub(super) fn new(
         cell: &CellScene,
         b: usize,
         size: [f64; 3],
         grip: [f64; 2],
         flange: &UnitQuaternion<f64>,
+        side_pad: f64,
     ) -> Option<Inside> {
         let held = cell.boxes.get(b)?;
         let m = flange.to_rotation_matrix().into_inner();
@@ -357,7 +363,7 @@ impl Inside {
             (c - w - shift, c + w - shift)
         };
         Some(Inside {
-            product: [0, 1].map(|a| bound(a, extent(a) + HELD_PADDING, grip[a])),
+            product: [0, 1].map(|a| bound(a, extent(a) + side_pad.min(HELD_PADDING), grip[a])),
             cup: [0, 1].map(|a| bound(a, CUP_RADIUS + PADDING, 0.0)),
             rim: held.size[2],
             walls: [0, 1].map(|a| {
@@ -429,8 +435,14 @@ impl Inside {
                 lo = lo.max(self.cup[axis].0);
                 hi = hi.min(self.cup[axis].1);
             }
-            if lo > hi {
+            // A product lowered into a snug slot is padded to fit it
+            // exactly (`Checker::lowering`): bounds crossed by rounding
+            // alone are its centre line.
+            if lo > hi + 1e-9 {
                 continue;
+            }
+            if lo > hi {
+                (lo, hi) = ((lo + hi) / 2.0, (lo + hi) / 2.0);
             }
             if let Some(wrist) = self.wrist.filter(|_| with_wrist)
                 && let Some(by) = wrist.clearance(goal[2], self.rim)
@@ -493,8 +505,15 @@ mod tests {
         // A 60 mm deep product, 20 mm wide: its padded bounds leave 2 mm
         // either way of the centre line in y; the cup (20 mm, 10 mm
         // padding) would leave none, but a dropped product is kept alone.
-        let inside = Inside::new(&cell, 0, [0.02, 0.06, 0.05], [0.0, 0.0], &down(0.0))
-            .expect("the box exists");
+        let inside = Inside::new(
+            &cell,
+            0,
+            [0.02, 0.06, 0.05],
+            [0.0, 0.0],
+            &down(0.0),
+            HELD_PADDING,
+        )
+        .expect("the box exists");
         let at = |y: f64| [-0.2, 0.65 + y, 0.2];
         assert_eq!(inside.keep_dropped(at(0.001)), (at(0.001), 0.0), "inside");
         // 4 mm towards +y: moved back 2 mm, the product itself still 2 mm
@@ -511,13 +530,43 @@ mod tests {
         assert_eq!((kept[0], kept[2]), (-0.2, 0.2), "x and z stay");
     }
 
+    /// A product 68 mm deep in a box 72 mm deep inside, 2 mm either side:
+    /// with the whole padding nothing fits across, and a release 1.5 mm
+    /// off the centre line is left there (where it collides); padded as
+    /// [`Checker::lowering`](crate::collision::Checker::lowering) pads it
+    /// down into its slot (the room less `LOWER_ROOM`), it is moved onto
+    /// the centre line.
+    #[test]
+    fn a_release_in_a_snug_slot_is_kept_on_its_centre_line() {
+        let cell = narrow_box();
+        let size = [0.04, 0.068, 0.05];
+        let at = [-0.2, 0.65 + 0.0015, 0.06];
+        let inside = |pad: f64| {
+            Inside::new(&cell, 0, size, [0.0, 0.0], &down(0.0), pad).expect("the box exists")
+        };
+        let padded = inside(HELD_PADDING).keep(at).expect("x fits");
+        assert_eq!(padded[1], at[1], "{padded:?}");
+        let lowered = inside(0.002 - crate::collision::LOWER_ROOM)
+            .keep(at)
+            .expect("moved");
+        assert!((lowered[1] - 0.65).abs() < 1e-9, "{lowered:?}");
+        assert_eq!((lowered[0], lowered[2]), (at[0], at[2]), "x and z stay");
+    }
+
     #[test]
     fn a_release_against_a_wall_is_kept_inside_the_box() {
         let cell = narrow_box();
         // A 60 mm deep product: 36 - 30 - 3 mm padding - 1 mm margin
         // leaves 2 mm either way of the centre line.
-        let inside = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(0.0))
-            .expect("the box exists");
+        let inside = Inside::new(
+            &cell,
+            0,
+            [0.04, 0.06, 0.05],
+            [0.0, 0.0],
+            &down(0.0),
+            HELD_PADDING,
+        )
+        .expect("the box exists");
         let at = |y: f64| [-0.2, 0.65 + y, 0.06];
         assert_eq!(inside.keep(at(0.0015)), Some(at(0.0015)), "already inside");
         let kept = inside.keep(at(0.004)).expect("moved");
@@ -527,14 +576,28 @@ mod tests {
         assert!((kept[1] - 0.648).abs() < 1e-9, "{kept:?}");
         // Hanging 2 mm off the cup towards +y, the cup lets go 2 mm further
         // towards -y.
-        let off = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.002], &down(0.0))
-            .expect("the box exists");
+        let off = Inside::new(
+            &cell,
+            0,
+            [0.04, 0.06, 0.05],
+            [0.0, 0.002],
+            &down(0.0),
+            HELD_PADDING,
+        )
+        .expect("the box exists");
         let kept = off.keep(at(0.001)).expect("moved");
         assert!((kept[1] - 0.65).abs() < 1e-9, "{kept:?}");
         // Turned a quarter, the product's 60 mm lie along x: in y it is
         // 40 mm, and the cup (20 mm and 10 mm padding) is the bound.
-        let turned = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(FRAC_PI_2))
-            .expect("the box exists");
+        let turned = Inside::new(
+            &cell,
+            0,
+            [0.04, 0.06, 0.05],
+            [0.0, 0.0],
+            &down(FRAC_PI_2),
+            HELD_PADDING,
+        )
+        .expect("the box exists");
         let kept = turned.keep(at(0.007)).expect("moved");
         assert!((kept[1] - 0.655).abs() < 1e-9, "{kept:?}");
         // Above the rim, the cup is not in the box: the product's bound.
@@ -556,8 +619,15 @@ mod tests {
     #[test]
     fn a_release_deep_in_a_box_keeps_the_wrist_inside_the_walls_too() {
         let cell = narrow_box();
-        let inside = Inside::new(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], &down(0.0))
-            .expect("the box exists");
+        let inside = Inside::new(
+            &cell,
+            0,
+            [0.04, 0.06, 0.05],
+            [0.0, 0.0],
+            &down(0.0),
+            HELD_PADDING,
+        )
+        .expect("the box exists");
         let wrist = wrist_around_tool(&Arm::ur10());
         let deep = inside.with_wrist(cell.suction, wrist);
         let at = |x: f64, y: f64, z: f64| [-0.2 + x, 0.65 + y, z];
@@ -645,13 +715,27 @@ mod tests {
     #[test]
     fn a_product_wider_than_the_box_is_not_moved() {
         let cell = narrow_box();
-        let inside = Inside::new(&cell, 0, [0.04, 0.075, 0.05], [0.0, 0.0], &down(0.0))
-            .expect("the box exists");
+        let inside = Inside::new(
+            &cell,
+            0,
+            [0.04, 0.075, 0.05],
+            [0.0, 0.0],
+            &down(0.0),
+            HELD_PADDING,
+        )
+        .expect("the box exists");
         // Along the box's length it fits: only that axis is kept.
         assert_eq!(inside.keep([-0.2, 0.653, 0.06]), Some([-0.2, 0.653, 0.06]));
         assert_eq!(inside.keep([-0.4, 0.653, 0.06]).map(|k| k[1]), Some(0.653));
         assert_eq!(
-            Inside::new(&cell, 1, [0.04, 0.04, 0.05], [0.0, 0.0], &down(0.0)),
+            Inside::new(
+                &cell,
+                1,
+                [0.04, 0.04, 0.05],
+                [0.0, 0.0],
+                &down(0.0),
+                HELD_PADDING
+            ),
             None
         );
     }

@@ -108,7 +108,10 @@ struct StagePlan<'l> {
     height: f64,
     /// Picking: the sensed top face, where the cup's descent stops.
     contact: Option<f64>,
-    load: Load<'l>,
+    /// What each sub-goal's motion carries and may touch (picking: until
+    /// the grip, then `gripped`'s product; placing: the held product,
+    /// padded down into the slot as the room beside it allows).
+    loads: [Load<'l>; 3],
     /// Picking: the product's size; the sub-goals after the grip (the
     /// lift) carry it off where it stood, hanging from the cup as the
     /// planned contact leaves it.
@@ -669,7 +672,7 @@ impl<W: World> Learned<'_, W> {
         'subgoals: for ((k, switch), kind) in
             schedule(plan.stage).into_iter().enumerate().zip(kinds)
         {
-            let load = gripped.as_ref().map_or(plan.load, Load::holding);
+            let load = gripped.as_ref().map_or(plan.loads[k], Load::holding);
             // The motion onto a top face is the guarded descent.
             let load = if switch == Suction::On {
                 load.guarded(self.station.task.cell.descent)
@@ -1408,7 +1411,7 @@ impl<W: World> Learned<'_, W> {
                 feature: centre,
                 height: spec.size[2],
                 contact: Some(centre[2] + spec.size[2] / 2.0),
-                load: Load::picking(name),
+                loads: [Load::picking(name); 3],
                 gripped: Some(spec.size),
                 yaw,
                 expert: expert::picking(centre, spec.size[2], cell.lift),
@@ -1470,6 +1473,15 @@ impl<W: World> Learned<'_, W> {
             expert::box_height(cell, s),
             [cell.base[0], cell.base[1]],
         );
+        let carrying = Load::holding(&held);
+        // Down into the slot, padded as the room beside it allows, the
+        // product turned as the cup carries it.
+        let m = flange.to_rotation_matrix().into_inner();
+        let lowered = self.station.checker.lowering(
+            held.clone(),
+            expert::released_centre(slot, spec.size[2]),
+            m[(1, 0)].atan2(m[(0, 0)]),
+        );
         let (placed, _) = self.stage(
             &StagePlan {
                 stage: Stage::Placing,
@@ -1477,13 +1489,19 @@ impl<W: World> Learned<'_, W> {
                 feature: [rim[0] - grip[0], rim[1] - grip[1], rim[2]],
                 height: spec.size[2],
                 contact: None,
-                load: Load::holding(&held),
+                loads: [carrying, carrying, Load::holding(&lowered)],
                 gripped: None,
                 yaw: 0.0,
                 expert,
-                inside: Inside::new(cell, cell.slots[s].box_index, spec.size, grip, &flange).map(
-                    |inside| inside.with_wrist(cell.suction, wrist_around_tool(self.station.arm)),
-                ),
+                inside: Inside::new(
+                    cell,
+                    cell.slots[s].box_index,
+                    spec.size,
+                    grip,
+                    &flange,
+                    lowered.side_pad,
+                )
+                .map(|inside| inside.with_wrist(cell.suction, wrist_around_tool(self.station.arm))),
             },
             lift,
             false,

@@ -142,7 +142,7 @@ impl<W: World> Learned<'_, W> {
         let s = &self.station;
         let (size, top) = (plan.gripped?, plan.contact?);
         let [over_switch, contact_switch, lift_switch] = schedule(Stage::Picking);
-        let free = plan.load;
+        let free = plan.loads[0];
         let guarded = free.guarded(s.task.cell.descent);
         let held = |at: &Joints| self.gripped_at(at, plan, size, top);
         // The first free shape whose hover is reached from `from`.
