@@ -336,6 +336,10 @@ pub enum Target {
     Slot,
 }
 
+/// The arm's joints as people call them, base first (a six-joint arm's;
+/// [`Shortfall::kind`] names its limits so).
+const JOINT_NAMES: [&str; 6] = ["base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3"];
+
 impl Shortfall {
     /// A short name of the kind, for counting.
     pub fn kind(&self) -> &'static str {
@@ -367,10 +371,17 @@ impl fmt::Display for Shortfall {
             Shortfall::Limits {
                 joint: Some(j),
                 value,
-            } => write!(
-                f,
-                "a policy step would take joint {j} to {value:.3} rad, outside its limits"
-            ),
+            } => match JOINT_NAMES.get(*j) {
+                // Named as `Shortfall::kind` names it (`eval`'s counts).
+                Some(name) => write!(
+                    f,
+                    "a policy step would take the {name} joint (joint {j}) to {value:.3} rad, outside its limits"
+                ),
+                None => write!(
+                    f,
+                    "a policy step would take joint {j} to {value:.3} rad, outside its limits"
+                ),
+            },
             Shortfall::Limits { joint: None, .. } => {
                 write!(f, "a policy step would not keep the cup pointing down")
             }
@@ -706,6 +717,24 @@ mod tests {
             bound_s: 0.0,
             error_m: None,
             outcome,
+        }
+    }
+
+    /// A joint limit is said with the joint's name, as `eval` counts it
+    /// (helper P: "joint 2" in `execute`, "elbow joint limit" in `eval`).
+    #[test]
+    fn a_joint_past_its_limit_is_named_as_eval_counts_it() {
+        for j in 0..6 {
+            let why = Shortfall::Limits {
+                joint: Some(j),
+                value: 3.209,
+            };
+            let name = why.kind().trim_end_matches(" joint limit");
+            let said = why.to_string();
+            assert!(
+                said.contains(&format!("the {name} joint (joint {j})")),
+                "{said}"
+            );
         }
     }
 

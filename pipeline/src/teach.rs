@@ -799,16 +799,28 @@ pub fn sequence_rule(
     let after = |m: &str, n: &str| {
         votes.get(&(m, n)).copied().unwrap_or(0) > votes.get(&(n, m)).copied().unwrap_or(0)
     };
-    let mut left = names.clone();
-    let mut list = Vec::new();
-    while !left.is_empty() {
-        let behind = |n: &str| left.iter().filter(|&&m| m != n && after(m, n)).count();
-        let i = (0..left.len())
-            .min_by_key(|&i| behind(left[i]))
-            .unwrap_or(0);
-        list.push(left.remove(i).to_owned());
-    }
-    let listed = SequenceRule::Listed(list);
+    // Ties (products no demonstration puts in an order) go in the order
+    // of `names`.
+    let priority = |names: Vec<&str>| {
+        let mut left = names;
+        let mut list = Vec::new();
+        while !left.is_empty() {
+            let behind = |n: &str| left.iter().filter(|&&m| m != n && after(m, n)).count();
+            let i = (0..left.len())
+                .min_by_key(|&i| behind(left[i]))
+                .unwrap_or(0);
+            list.push(left.remove(i).to_owned());
+        }
+        SequenceRule::Listed(list)
+    };
+    let listed = priority(names.clone());
+    // The same votes with the ties the other way round: a rival only
+    // (below), for a rule read from few pairs. Without it, two pairs in
+    // inventory order made the list the same as `ascending`, and nothing
+    // was said, where the same two pairs reversed were warned about.
+    let mut reversed = names.clone();
+    reversed.reverse();
+    let listed_other = priority(reversed);
     let candidates = if declared.is_empty() {
         [SequenceRule::Ascending, SequenceRule::Descending, listed]
     } else {
@@ -877,8 +889,10 @@ pub fn sequence_rule(
         .map(|&(a, b)| if a < b { (a, b) } else { (b, a) })
         .collect();
     if declared.is_empty() && pairs.len() < FEW_PAIRS {
+        let other = breaking(&listed_other);
         best.rivals = scored
             .into_iter()
+            .chain(std::iter::once((listed_other, other)))
             .filter(|(r, exceptions)| {
                 *r != best.rule
                     && exceptions.len() == best.exceptions.len()
@@ -1119,6 +1133,34 @@ demo o1_seen for o1 { sequence p3, p2 }";
             .map(String::from)
             .to_vec();
         assert_eq!(inferred.rivals, [SequenceRule::Listed(swapped)]);
+        // The same pair in the inventory's order (helper P: said for
+        // `descending`, not for `ascending`): the list with the products
+        // it does not show the other way round fits as well.
+        let along = "order o1 for inv { p2 -> s1
+  p3 -> s2 }
+demo o1_seen for o1 { sequence p2, p3 }";
+        let inferred = rule_of(along).ok().flatten().expect("a rule");
+        assert_eq!(inferred.rule, SequenceRule::Ascending);
+        let others = ["p6", "p5", "p4", "p2", "p3", "p1"]
+            .map(String::from)
+            .to_vec();
+        assert_eq!(inferred.rivals, [SequenceRule::Listed(others)]);
+        // A priority list read from two pairs (p2 before p1 and p3, which
+        // neither direction follows): so does the list with the other
+        // products the other way round.
+        let first = "order o1 for inv { p2 -> s1
+  p1 -> s2 }
+demo o1_seen for o1 { sequence p2, p1 }
+order o2 for inv { p2 -> s1
+  p3 -> s2 }
+demo o2_seen for o2 { sequence p2, p3 }";
+        let inferred = rule_of(first).ok().flatten().expect("a rule");
+        let list = |names: [&str; 6]| SequenceRule::Listed(names.map(String::from).to_vec());
+        assert_eq!(inferred.rule, list(["p2", "p1", "p3", "p4", "p5", "p6"]));
+        assert_eq!(
+            inferred.rivals,
+            [list(["p6", "p5", "p4", "p2", "p3", "p1"])]
+        );
         let three = "order o1 for inv { p3 -> s1
   p2 -> s2
   p1 -> s3 }
