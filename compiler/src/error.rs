@@ -195,6 +195,14 @@ pub enum Error {
         distance: f64,
         max: f64,
     },
+    #[error("the cell lies {} from the origin, farther than the simulator works ({max} m)", metres(*.coordinate))]
+    FarFromOrigin {
+        at: Loc,
+        /// The largest coordinate of the base, the pending area or a box
+        /// (m).
+        coordinate: f64,
+        max: f64,
+    },
     #[error("the robot cannot reach {pose} {task}")]
     Unreachable {
         at: Loc,
@@ -336,6 +344,7 @@ impl Error {
             Error::OutOfReach { .. } => "E036",
             Error::Unreachable { .. } => "E039",
             Error::FarFromBase { .. } => "E054",
+            Error::FarFromOrigin { .. } => "E055",
             Error::StartBlocked { .. } => "E053",
             Error::DoesNotFit { .. } => "E037",
             Error::PlacedOverlap { .. } => "E038",
@@ -384,6 +393,7 @@ impl Error {
             | Error::OutOfReach { at, .. }
             | Error::Unreachable { at, .. }
             | Error::FarFromBase { at, .. }
+            | Error::FarFromOrigin { at, .. }
             | Error::StartBlocked { at, .. }
             | Error::DoesNotFit { at, .. }
             | Error::PlacedOverlap { at, .. }
@@ -435,6 +445,9 @@ impl Error {
             }
             Error::OutOfReach { .. } => "too far from the base".into(),
             Error::FarFromBase { .. } => "far beyond any arm's reach".into(),
+            Error::FarFromOrigin { coordinate, .. } => {
+                format!("{} from the origin", metres(*coordinate))
+            }
             Error::Unreachable { tip, .. } => format!(
                 "the tool tip would be at ({:.3}, {:.3}, {:.3})",
                 tip[0], tip[1], tip[2]
@@ -524,6 +537,7 @@ impl Error {
             Error::OutsidePending { .. } => "move the product so that its whole footprint is inside the `pending` area, or enlarge the area".into(),
             Error::ProductsOverlap { .. } => "move one of them; footprints (centre ± half the width and depth) must not overlap".into(),
             Error::OutOfReach { min, max, .. } => format!("the UR10 reaches between {min:.2} m and {max:.2} m from its base axis; move it or the `base`"),
+            Error::FarFromOrigin { max, .. } => format!("move the whole cell nearer the origin (subtract the same x and y from the base, the pending area, the boxes, the slots and every product's place): every coordinate must lie within {max} m of it, where the simulator keeps 10 µm"),
             Error::FarFromBase { max, .. } => format!("check the number and its unit: lengths and positions are metres unless they carry `mm` or `cm` (`0.65`, `650 mm`); every pending area and box lies within {max} m of the cell's `base`"),
             Error::Unreachable { pose: Pose::Start, .. } => "the arm starts with its cup 0.35 m over the middle of the `pending` area: bring the area nearer the robot's base (or the `base` nearer the area)".into(),
             Error::Unreachable { meets_itself: true, .. } => "with the cup on the product's top face, the arm's wrist (or the cup's own body) meets the product itself: the cup is too short for this arm. Use a longer cup (`suction`)".into(),

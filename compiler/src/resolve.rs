@@ -277,6 +277,42 @@ fn within_workspace(
     ok
 }
 
+/// The farthest a cell's base, pending area or boxes may lie from the
+/// origin on any axis (m): the simulator works in single precision, which
+/// keeps about 10 µm there (`packwright_sim`'s own limit, which refused
+/// such a cell only in `execute`).
+pub const MAX_COORDINATE: f64 = 100.0;
+
+/// Whether the base, the pending area and every box (already within
+/// [`WORKSPACE_RADIUS`] of the base) lie within [`MAX_COORDINATE`] of
+/// the origin on every axis; else one error, at the base: a cell moved
+/// far from the origin (its coordinates in a plant's frame) is moved back
+/// as a whole.
+fn near_origin(
+    base: [f64; 3],
+    base_at: Loc,
+    pending: Rect,
+    boxes: &[BoxDef],
+    errors: &mut Vec<Error>,
+) -> bool {
+    let corners = |r: Rect| [r.min[0], r.min[1], r.max[0], r.max[1]];
+    let farthest = base
+        .into_iter()
+        .chain(corners(pending))
+        .chain(boxes.iter().flat_map(|b| corners(b.footprint())))
+        .map(f64::abs)
+        .fold(0.0, f64::max);
+    if farthest <= MAX_COORDINATE {
+        return true;
+    }
+    errors.push(Error::FarFromOrigin {
+        at: base_at,
+        coordinate: farthest,
+        max: MAX_COORDINATE,
+    });
+    false
+}
+
 /// How to write a length that must be above zero.
 const POSITIVE_LENGTH: &str = "write a positive length";
 
@@ -648,6 +684,7 @@ impl Resolver<'_> {
         let robot_at = robot_path_at.or(robot.loc()).unwrap_or(at);
         let pending_at = pending.loc().unwrap_or(block);
         let robot = robot.required(block, item.clone(), "robot ur10", e);
+        let base_at = base.loc().unwrap_or(block);
         let base = base.required(block, item.clone(), "base (0, 0, 0)", e);
         let suction = suction.required(block, item.clone(), "suction 100 mm", e);
         let pending = pending.required(
@@ -681,7 +718,8 @@ impl Resolver<'_> {
             ok = false;
         }
         if let (Some(base), Some(pending)) = (base, pending) {
-            ok &= within_workspace(base, pending, pending_at, &boxes, e);
+            ok &= within_workspace(base, pending, pending_at, &boxes, e)
+                && near_origin(base, base_at, pending, &boxes, e);
         }
         let (Some(robot), Some(base), Some(suction), Some(pending), true) =
             (robot, base, suction, pending, ok)

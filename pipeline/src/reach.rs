@@ -211,6 +211,15 @@ mod tests {
         );
     }
 
+    /// `check` refuses a cell the simulator cannot build (E055).
+    #[test]
+    fn the_compilers_farthest_coordinate_is_the_simulators() {
+        assert_eq!(
+            packwright_compiler::resolve::MAX_COORDINATE,
+            packwright_sim::MAX_COORD
+        );
+    }
+
     /// W004's fix names the height the expert lets a product go at
     /// where nothing stops it lower: the compiler's copy must agree.
     #[test]

@@ -15,7 +15,7 @@ use rapier3d::prelude::*;
 const FRICTION: f32 = 0.8;
 
 /// Largest coordinate or size accepted, metres (f32 keeps ~10 µm there).
-const MAX_COORD: f64 = 100.0;
+pub const MAX_COORD: f64 = 100.0;
 /// Smallest product dimension, metres (`check` refuses less: E025).
 pub const MIN_SIZE: f64 = 0.001;
 /// Range of product masses, kilograms.

@@ -55,7 +55,7 @@ mod contacts;
 mod convert;
 mod error;
 
-pub use build::MIN_SIZE;
+pub use build::{MAX_COORD, MIN_SIZE};
 pub use error::SimError;
 pub use packwright_kinematics::body::{BOX_WALL, CUP_RADIUS, CUP_SHORT};
 
