@@ -492,8 +492,9 @@ pub struct GenerateArgs {
     /// How many cells: seeds SEED to SEED + COUNT - 1.
     #[arg(long, value_name = "COUNT", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     pub count: u64,
-    /// The directory to write into (created if needed; files of the same
-    /// names are replaced).
+    /// The directory to write into (created if needed; a file of the same
+    /// name is replaced only if it is what its seed generates: one edited
+    /// since is kept, and nothing is written, exit 2).
     #[arg(short, long, value_name = "DIR")]
     pub output: PathBuf,
     /// Teach every cell in this order instead of the seed's own (the rest

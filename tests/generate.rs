@@ -464,6 +464,21 @@ fn the_command_writes_one_file_per_seed() {
             .map(str::to_owned)
             .into()
     );
+    // A generated file edited since (helper N: overwritten without a
+    // word): refused, exit 2, nothing written, the edit kept.
+    let edited = dir.join("gen_6.pack");
+    let text = format!("# my edit\n{}", family_cell(6).text);
+    fs::write(&edited, &text).expect("edited");
+    let refused = packwright(&["generate", "--seed", "5", "--count", "3", "-o", &out]);
+    assert_eq!(refused.status.code(), Some(2));
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        said.contains("gen_6.pack") && said.contains("no edit is lost"),
+        "{said}"
+    );
+    assert!(refused.stdout.is_empty(), "nothing written");
+    assert_eq!(fs::read_to_string(&edited).expect("kept"), text);
+    fs::remove_file(&edited).expect("removed");
     // The wide family, beside the standard files.
     let wide = packwright(&["generate", "--family", "wide", "--seed", "5", "-o", &out]);
     assert_eq!(wide.status.code(), Some(0));

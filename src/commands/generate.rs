@@ -38,10 +38,33 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<Exit> {
         hand: args.hand.map(usize::from),
         reversed_stock: args.reversed_stock,
     };
-    for seed in args.seed..=last {
-        let generated = generated_variant(family, seed, rule, variant);
-        let path = args.output.join(generated.file_name());
-        write_file_atomically(&path, generated.text.as_bytes())?;
+    let generated: Vec<_> = (args.seed..=last)
+        .map(|seed| {
+            let g = generated_variant(family, seed, rule, variant);
+            (args.output.join(g.file_name()), g.text)
+        })
+        .collect();
+    // A file of the same name that is not what its seed generates was
+    // edited (or written by something else): nothing is replaced, so no
+    // edit is lost. One that is the same is written again.
+    let edited: Vec<String> = generated
+        .iter()
+        .filter(|(path, text)| {
+            path.exists() && fs::read(path).map_or(true, |old| old != text.as_bytes())
+        })
+        .map(|(path, _)| path.display().to_string())
+        .collect();
+    if !edited.is_empty() {
+        let one = edited.len() == 1;
+        bail!(
+            "{}: not what {} seed generates (edited since?); nothing was written, so no edit is lost: move {} or choose another -o",
+            edited.join(", "),
+            if one { "its" } else { "their" },
+            if one { "it" } else { "them" },
+        );
+    }
+    for (path, text) in &generated {
+        write_file_atomically(path, text.as_bytes())?;
         outln!("{}", path.display());
     }
     Ok(Exit::Success)
