@@ -1124,27 +1124,31 @@ inventory inv for c {{
     /// declared direction, and the rule stands alone.
     #[test]
     fn a_rule_read_from_few_pairs_names_the_others_that_fit() {
-        let one = "order o1 for inv { p3 -> s1
-  p2 -> s2 }
-demo o1_seen for o1 { sequence p3, p2 }";
-        let inferred = rule_of(one).ok().flatten().expect("a rule");
+        let list = |names: [&str; 6]| SequenceRule::Listed(names.map(String::from).to_vec());
+        // One demonstration handling `a` then `b`.
+        let pair = |a: &str, b: &str| {
+            let text = format!(
+                "order o1 for inv {{ {a} -> s1
+  {b} -> s2 }}
+demo o1_seen for o1 {{ sequence {a}, {b} }}"
+            );
+            rule_of(&text).ok().flatten().expect("a rule")
+        };
+        let inferred = pair("p3", "p2");
         assert_eq!(inferred.rule, SequenceRule::Descending);
-        let swapped = ["p1", "p3", "p2", "p4", "p5", "p6"]
-            .map(String::from)
-            .to_vec();
-        assert_eq!(inferred.rivals, [SequenceRule::Listed(swapped)]);
+        assert_eq!(
+            inferred.rivals,
+            [list(["p1", "p3", "p2", "p4", "p5", "p6"])]
+        );
         // The same pair in the inventory's order (helper P: said for
         // `descending`, not for `ascending`): the list with the products
         // it does not show the other way round fits as well.
-        let along = "order o1 for inv { p2 -> s1
-  p3 -> s2 }
-demo o1_seen for o1 { sequence p2, p3 }";
-        let inferred = rule_of(along).ok().flatten().expect("a rule");
+        let inferred = pair("p2", "p3");
         assert_eq!(inferred.rule, SequenceRule::Ascending);
-        let others = ["p6", "p5", "p4", "p2", "p3", "p1"]
-            .map(String::from)
-            .to_vec();
-        assert_eq!(inferred.rivals, [SequenceRule::Listed(others)]);
+        assert_eq!(
+            inferred.rivals,
+            [list(["p6", "p5", "p4", "p2", "p3", "p1"])]
+        );
         // A priority list read from two pairs (p2 before p1 and p3, which
         // neither direction follows): so does the list with the other
         // products the other way round.
@@ -1155,7 +1159,6 @@ order o2 for inv { p2 -> s1
   p3 -> s2 }
 demo o2_seen for o2 { sequence p2, p3 }";
         let inferred = rule_of(first).ok().flatten().expect("a rule");
-        let list = |names: [&str; 6]| SequenceRule::Listed(names.map(String::from).to_vec());
         assert_eq!(inferred.rule, list(["p2", "p1", "p3", "p4", "p5", "p6"]));
         assert_eq!(
             inferred.rivals,

@@ -493,6 +493,12 @@ mod tests {
         }
     }
 
+    /// [`Inside`] for box `b` of `cell`, a product of `size` hanging `grip`
+    /// off the cup turned by `yaw`, padded all round.
+    fn padded(cell: &CellScene, b: usize, size: [f64; 3], grip: [f64; 2], yaw: f64) -> Inside {
+        Inside::new(cell, b, size, grip, &down(yaw), HELD_PADDING).expect("the box exists")
+    }
+
     /// The cup pointing down, turned by `yaw`.
     fn down(yaw: f64) -> UnitQuaternion<f64> {
         UnitQuaternion::from_euler_angles(0.0, 0.0, yaw)
@@ -505,15 +511,7 @@ mod tests {
         // A 60 mm deep product, 20 mm wide: its padded bounds leave 2 mm
         // either way of the centre line in y; the cup (20 mm, 10 mm
         // padding) would leave none, but a dropped product is kept alone.
-        let inside = Inside::new(
-            &cell,
-            0,
-            [0.02, 0.06, 0.05],
-            [0.0, 0.0],
-            &down(0.0),
-            HELD_PADDING,
-        )
-        .expect("the box exists");
+        let inside = padded(&cell, 0, [0.02, 0.06, 0.05], [0.0, 0.0], 0.0);
         let at = |y: f64| [-0.2, 0.65 + y, 0.2];
         assert_eq!(inside.keep_dropped(at(0.001)), (at(0.001), 0.0), "inside");
         // 4 mm towards +y: moved back 2 mm, the product itself still 2 mm
@@ -558,15 +556,7 @@ mod tests {
         let cell = narrow_box();
         // A 60 mm deep product: 36 - 30 - 3 mm padding - 1 mm margin
         // leaves 2 mm either way of the centre line.
-        let inside = Inside::new(
-            &cell,
-            0,
-            [0.04, 0.06, 0.05],
-            [0.0, 0.0],
-            &down(0.0),
-            HELD_PADDING,
-        )
-        .expect("the box exists");
+        let inside = padded(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], 0.0);
         let at = |y: f64| [-0.2, 0.65 + y, 0.06];
         assert_eq!(inside.keep(at(0.0015)), Some(at(0.0015)), "already inside");
         let kept = inside.keep(at(0.004)).expect("moved");
@@ -576,28 +566,12 @@ mod tests {
         assert!((kept[1] - 0.648).abs() < 1e-9, "{kept:?}");
         // Hanging 2 mm off the cup towards +y, the cup lets go 2 mm further
         // towards -y.
-        let off = Inside::new(
-            &cell,
-            0,
-            [0.04, 0.06, 0.05],
-            [0.0, 0.002],
-            &down(0.0),
-            HELD_PADDING,
-        )
-        .expect("the box exists");
+        let off = padded(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.002], 0.0);
         let kept = off.keep(at(0.001)).expect("moved");
         assert!((kept[1] - 0.65).abs() < 1e-9, "{kept:?}");
         // Turned a quarter, the product's 60 mm lie along x: in y it is
         // 40 mm, and the cup (20 mm and 10 mm padding) is the bound.
-        let turned = Inside::new(
-            &cell,
-            0,
-            [0.04, 0.06, 0.05],
-            [0.0, 0.0],
-            &down(FRAC_PI_2),
-            HELD_PADDING,
-        )
-        .expect("the box exists");
+        let turned = padded(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], FRAC_PI_2);
         let kept = turned.keep(at(0.007)).expect("moved");
         assert!((kept[1] - 0.655).abs() < 1e-9, "{kept:?}");
         // Above the rim, the cup is not in the box: the product's bound.
@@ -619,15 +593,7 @@ mod tests {
     #[test]
     fn a_release_deep_in_a_box_keeps_the_wrist_inside_the_walls_too() {
         let cell = narrow_box();
-        let inside = Inside::new(
-            &cell,
-            0,
-            [0.04, 0.06, 0.05],
-            [0.0, 0.0],
-            &down(0.0),
-            HELD_PADDING,
-        )
-        .expect("the box exists");
+        let inside = padded(&cell, 0, [0.04, 0.06, 0.05], [0.0, 0.0], 0.0);
         let wrist = wrist_around_tool(&Arm::ur10());
         let deep = inside.with_wrist(cell.suction, wrist);
         let at = |x: f64, y: f64, z: f64| [-0.2 + x, 0.65 + y, z];
@@ -715,15 +681,7 @@ mod tests {
     #[test]
     fn a_product_wider_than_the_box_is_not_moved() {
         let cell = narrow_box();
-        let inside = Inside::new(
-            &cell,
-            0,
-            [0.04, 0.075, 0.05],
-            [0.0, 0.0],
-            &down(0.0),
-            HELD_PADDING,
-        )
-        .expect("the box exists");
+        let inside = padded(&cell, 0, [0.04, 0.075, 0.05], [0.0, 0.0], 0.0);
         // Along the box's length it fits: only that axis is kept.
         assert_eq!(inside.keep([-0.2, 0.653, 0.06]), Some([-0.2, 0.653, 0.06]));
         assert_eq!(inside.keep([-0.4, 0.653, 0.06]).map(|k| k[1]), Some(0.653));
