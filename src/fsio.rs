@@ -344,6 +344,15 @@ fn ours(marker: &Path) -> bool {
 /// (`marker` among them), checked before a long run (`train`) that
 /// would otherwise find out only when it writes.
 pub fn check_replaceable(dir: &Path, marker: &str, names: &[&str]) -> anyhow::Result<()> {
+    // The output replaces its directory as a whole, through a sibling
+    // swapped into place: `.` has no sibling to swap with (helper N: "cannot
+    // move . aside").
+    if dir.file_name().is_none() {
+        bail!(
+            "`{}` names no directory of its own (it is `.`, `..` or a root), and the output replaces its directory as a whole: name one, e.g. `-o out`",
+            dir.display()
+        );
+    }
     recover_interrupted(dir);
     match fs::metadata(dir) {
         Ok(m) if !m.is_dir() => bail!("{} exists and is not a directory", dir.display()),
@@ -478,6 +487,20 @@ pub fn write_dir_atomically(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `-o .` (or `..`, `./`, `/`) is refused before anything is read or
+    /// written, saying why: the output replaces its directory as a whole.
+    #[test]
+    fn an_output_directory_must_have_a_name() {
+        for dir in [".", "..", "./", "/", "a/.."] {
+            let refused = check_replaceable(Path::new(dir), "marker.json", &[])
+                .expect_err(dir)
+                .to_string();
+            assert!(refused.contains("names no directory"), "{dir}: {refused}");
+        }
+        let named = scratch("named").join("out");
+        assert!(check_replaceable(&named, "marker.json", &[]).is_ok());
+    }
 
     /// Output to a pipe (as to `/dev/null`, a device) goes through it and
     /// leaves it a pipe: a file renamed over it replaced `/dev/null` for
