@@ -1285,8 +1285,9 @@ mod tests {
     /// side): padded all round, the release collides, and every planner
     /// let it go above the rim; lowered ([`Checker::lowering`]), its
     /// sides are padded by the room less [`LOWER_ROOM`], and the release
-    /// and the last 3 cm down to it are free. With room to spare the padding stays whole; a product
-    /// already packed beside the slot counts as a wall does.
+    /// and the last 3 cm down to it are free. With room to spare the
+    /// padding stays whole; a product already packed beside the slot
+    /// counts as a wall does.
     #[test]
     fn a_product_lowered_into_a_snug_slot_is_padded_with_the_room_it_has() {
         use crate::execute::{Load, reach};

@@ -814,13 +814,6 @@ pub fn sequence_rule(
         SequenceRule::Listed(list)
     };
     let listed = priority(names.clone());
-    // The same votes with the ties the other way round: a rival only
-    // (below), for a rule read from few pairs. Without it, two pairs in
-    // inventory order made the list the same as `ascending`, and nothing
-    // was said, where the same two pairs reversed were warned about.
-    let mut reversed = names.clone();
-    reversed.reverse();
-    let listed_other = priority(reversed);
     let candidates = if declared.is_empty() {
         [SequenceRule::Ascending, SequenceRule::Descending, listed]
     } else {
@@ -889,6 +882,13 @@ pub fn sequence_rule(
         .map(|&(a, b)| if a < b { (a, b) } else { (b, a) })
         .collect();
     if declared.is_empty() && pairs.len() < FEW_PAIRS {
+        // The same votes with the ties the other way round, a rival only:
+        // without it, two pairs in inventory order made the list the same
+        // as `ascending`, and nothing was said, where the same two pairs
+        // reversed were warned about.
+        let mut reversed = names.clone();
+        reversed.reverse();
+        let listed_other = priority(reversed);
         let other = breaking(&listed_other);
         best.rivals = scored
             .into_iter()

@@ -49,8 +49,11 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<Exit> {
     // edit is lost. One that is the same is written again.
     let edited: Vec<String> = generated
         .iter()
-        .filter(|(path, text)| {
-            path.exists() && fs::read(path).map_or(true, |old| old != text.as_bytes())
+        .filter(|(path, text)| match fs::read(path) {
+            Ok(old) => old != text.as_bytes(),
+            // Missing: written. Unreadable (a directory of that name):
+            // not replaced either.
+            Err(e) => e.kind() != std::io::ErrorKind::NotFound,
         })
         .map(|(path, _)| path.display().to_string())
         .collect();
