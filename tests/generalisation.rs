@@ -407,6 +407,21 @@ fn a_tray_close_behind_the_base_is_reached_in_another_arm_shape() {
     }
 }
 
+/// A tote close behind the base, and a tall product standing beside the
+/// flat ones in front (tests/cells/tote_behind_tall.pack, a helper's probe
+/// cell). Carrying a product to the tote, the arm changes its shape on the
+/// way, as the expert's does; another shape's joints came with the base
+/// more than half a turn from where it stood, and the swing there took
+/// the upper arm the long way round the base, into the tall product: a
+/// fallback in 3 of the 10 scenarios of the file's suite (20 of the
+/// probe's 61). That shape's base is now also tried a whole turn nearer.
+#[test]
+fn another_arm_shape_is_reached_the_short_way_round_the_base() {
+    for scenario in ["c1_n2/04", "c1_n2/08"] {
+        file_packs_without_fallback("tests/cells/tote_behind_tall.pack", scenario);
+    }
+}
+
 /// Products waiting close to the base, the box behind it
 /// (tests/cells/near_pending.pack, a helper's probe cell): after the last
 /// release of `n2_8010/01` and `n1_8010/07` every way up the policy's

@@ -17,7 +17,7 @@ mod regrip;
 mod steps;
 
 pub use steps::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps, tolerance};
-use steps::{MORE_STEPS, policy_steps_near};
+use steps::{MORE_STEPS, policy_steps_held, policy_steps_near};
 
 use super::reasoner::{f32s, graph, in_slot, lifted};
 use super::station::{
@@ -29,7 +29,7 @@ use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
 use guards::{
     COLLIDING_RELEASE_RAISE, Inside, KEEP_INSIDE, descent_vias, held_at_limits, level_vias,
-    nearer_middle, release_collides, swing_via, with_room,
+    nearer_middle, release_collides, shorter_turn, swing_via, with_room,
 };
 use nalgebra::Vector3;
 use packwright_interface::outcome::{
@@ -218,17 +218,36 @@ impl<W: World> Learned<'_, W> {
                 action
             },
         );
+        // Steps that overshoot the shoulder's or the elbow's limit on the
+        // way (an elbow folded near its limit to reach near the base):
+        // those joints held inside their limits.
+        let steps = match steps {
+            Err(Shortfall::Limits {
+                joint: Some(1 | 2), ..
+            }) => policy_steps_held(
+                MORE_STEPS,
+                arm,
+                base,
+                suction,
+                start,
+                goal,
+                tolerance,
+                &mut |q, delta| self.act(q, delta),
+            )
+            .or(steps),
+            steps => steps,
+        };
         // A goal far round the base the policy fell short of: through a
         // via point half way round, the way the base has room.
         let steps = steps.or_else(|why| {
             let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
             let from: [f64; 3] = s.tip(&start);
             let via = swing_via(base, start[0], from, goal).ok_or(why.clone())?;
-            let mut steps = policy_steps(arm, base, suction, start, via, REACHED_VIA, act)
+            let mut steps = policy_steps_held(0, arm, base, suction, start, via, REACHED_VIA, act)
                 .map_err(|_| why.clone())?;
             let near = steps.last().copied().unwrap_or(start);
-            let rest =
-                policy_steps(arm, base, suction, near, goal, tolerance, act).map_err(|_| why)?;
+            let rest = policy_steps_held(0, arm, base, suction, near, goal, tolerance, act)
+                .map_err(|_| why)?;
             steps.extend(rest);
             Ok(steps)
         })?;
@@ -410,7 +429,7 @@ impl<W: World> Learned<'_, W> {
             });
             ends.extend(more);
         }
-        ends.into_iter().find_map(|(from, end)| {
+        let mut tried = |from: Joints, end: Joints| {
             // Wrist 1 either way round: turning it the shorter way can
             // fold wrist 2 into the forearm as the wrist flips.
             let turns = [0.0, -TAU, TAU].map(|t| {
@@ -436,6 +455,23 @@ impl<W: World> Learned<'_, W> {
                         })
                 })
                 .and_then(|route| then(&route).map(|found| (route, found)))
+        };
+        if let Some(found) = ends.iter().find_map(|&(from, end)| tried(from, end)) {
+            return Some(found);
+        }
+        // Another shape's joints come with the base in its first turn,
+        // which can leave it more than half a turn round from `start`: the
+        // swing there sweeps the arm the long way round, through what
+        // stands near the base (a box behind the base, reached past a tall
+        // product beside it), where the expert's nearest solution turns
+        // the short way. The same ends a whole turn round.
+        ends.iter().find_map(|&(from, end)| {
+            let turn = shorter_turn(start[0], end[0])?;
+            let [from, end] = [from, end].map(|mut q| {
+                q[0] += turn;
+                q
+            });
+            tried(from, end)
         })
     }
 

@@ -157,6 +157,76 @@ pub fn policy_steps_near(
     tolerance: f64,
     action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
 ) -> Result<Vec<Joints>, Shortfall> {
+    steps_toward(
+        Hold::No,
+        more,
+        arm,
+        base,
+        suction,
+        start,
+        goal,
+        tolerance,
+        action,
+    )
+}
+
+/// How far inside its limits (rad) [`policy_steps_held`] holds the
+/// shoulder and the elbow.
+pub(super) const HOLD_MARGIN: f64 = 0.01;
+
+/// [`policy_steps_near`] with the shoulder and the elbow held
+/// [`HOLD_MARGIN`] inside their limits: a step that would take either
+/// past is cut short there (the wrist turned with the step as cut, so the
+/// cup stays down), and the other joints' steps go on. Steps that stay
+/// within the limits are [`policy_steps_near`]'s, bit for bit. Near the base, an
+/// elbow folded to reach a product a few tenths of a metre out is close
+/// to its limit, and the policy's steps overshoot it on the way before
+/// they come back (probe cell 6003 reversed: the elbow to 3.209 rad for a
+/// goal the arm reaches at 3.0). For the learned loop only: DAgger's
+/// rollouts, and the policy as taught, step without it.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn policy_steps_held(
+    more: usize,
+    arm: &Arm,
+    base: &Isometry3<f64>,
+    suction: f64,
+    start: Joints,
+    goal: [f64; 3],
+    tolerance: f64,
+    action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
+) -> Result<Vec<Joints>, Shortfall> {
+    steps_toward(
+        Hold::ShoulderElbow,
+        more,
+        arm,
+        base,
+        suction,
+        start,
+        goal,
+        tolerance,
+        action,
+    )
+}
+
+/// Whether [`steps_toward`] holds joints inside their limits.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Hold {
+    No,
+    ShoulderElbow,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn steps_toward(
+    hold: Hold,
+    more: usize,
+    arm: &Arm,
+    base: &Isometry3<f64>,
+    suction: f64,
+    start: Joints,
+    goal: [f64; 3],
+    tolerance: f64,
+    action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
+) -> Result<Vec<Joints>, Shortfall> {
     let mut q = start;
     let mut flange = arm.flange_pose(base, &q);
     let mut tip = Arm::tip_of(&flange, suction);
@@ -189,7 +259,17 @@ pub fn policy_steps_near(
                 distance_m: away,
             }));
         }
-        let step = record::clip(action(&q, delta).map(f64::from));
+        let mut step = record::clip(action(&q, delta).map(f64::from));
+        if hold == Hold::ShoulderElbow {
+            for j in [1, 2] {
+                let l = &arm.limits[j];
+                let to = q[j] + step[j];
+                let (lower, upper) = (l.lower + HOLD_MARGIN, l.upper - HOLD_MARGIN);
+                if !l.contains(to) && lower < upper {
+                    step[j] = to.clamp(lower, upper) - q[j];
+                }
+            }
+        }
         let stepped = match &closed {
             Some(c) => within_limits(arm, stepped(&q, step)).map(|next| {
                 q = next;
@@ -341,5 +421,99 @@ mod tests {
                 "no {ending} among {outcomes:?}"
             );
         }
+    }
+
+    /// Held steps go on where a step would take the shoulder or the elbow
+    /// past its limit, each held [`HOLD_MARGIN`] inside it, the cup still
+    /// down; where no step leaves the limits, they are the policy's own
+    /// steps bit for bit (random actions from random cup-down starts).
+    #[test]
+    fn held_steps_stay_inside_the_limits_and_are_the_policys_where_it_does() {
+        let arm = Arm::ur10();
+        let base = Isometry3::translation(0.0, 0.0, 0.0);
+        let suction = 0.12;
+        let mut x = 29u64;
+        let mut next = move || {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((x >> 40) as f64 / (1u64 << 24) as f64) * 2.0 - 1.0
+        };
+        let (mut same, mut held) = (0, 0);
+        for _ in 0..60 {
+            let tip = Point3::new(0.5 + 0.3 * next(), 0.4 * next(), 0.3 + 0.1 * next());
+            let Some(start) = arm.tool_down_ik(
+                &base,
+                tip,
+                next(),
+                suction,
+                &[0.0, -1.5, 1.5, -1.6, -1.6, 0.0],
+            ) else {
+                continue;
+            };
+            let down = arm.flange_pose(&base, &start).rotation;
+            // Wandering steps, and steps folding the elbow (or lowering
+            // the shoulder) until it would leave its limit.
+            let wander: Vec<[f32; 3]> = (0..MAX_POLICY_STEPS + MORE_STEPS)
+                .map(|_| {
+                    [
+                        0.1 * next() as f32,
+                        0.1 * next() as f32,
+                        0.1 * next() as f32,
+                    ]
+                })
+                .collect();
+            let fold: Vec<[f32; 3]> = wander.iter().map(|a| [a[0], a[1], 1.0]).collect();
+            let lower: Vec<[f32; 3]> = wander.iter().map(|a| [a[0], -1.0, a[2]]).collect();
+            let far = [3.0, 0.0, 0.5];
+            for actions in [&wander, &fold, &lower] {
+                // The joints each step left the arm in (the policy is
+                // asked from each).
+                let mut seen: Vec<Joints> = Vec::new();
+                let mut run = |hold: bool| {
+                    seen.clear();
+                    let action = &mut |q: &Joints, _: [f64; 3]| {
+                        seen.push(*q);
+                        actions[seen.len() - 1]
+                    };
+                    if hold {
+                        policy_steps_held(
+                            MORE_STEPS, &arm, &base, suction, start, far, 0.01, action,
+                        )
+                    } else {
+                        policy_steps_near(
+                            MORE_STEPS, &arm, &base, suction, start, far, 0.01, action,
+                        )
+                    }
+                };
+                let own = run(false);
+                let kept = run(true);
+                match &own {
+                    Err(Shortfall::Limits {
+                        joint: Some(1 | 2), ..
+                    }) => {
+                        held += 1;
+                        // Held, the steps go on, short of a goal out of
+                        // reach, every joint inside its limits and the
+                        // cup down.
+                        assert!(
+                            matches!(kept, Err(Shortfall::Short { steps, .. }) if steps >= MAX_POLICY_STEPS),
+                            "{kept:?}"
+                        );
+                        assert_eq!(seen.len(), MAX_POLICY_STEPS);
+                        for q in &seen {
+                            assert!((1..5).all(|j| arm.limits[j].contains(q[j])), "{q:?}");
+                            let turned = arm.flange_pose(&base, q).rotation.angle_to(&down);
+                            assert!(turned < 1e-6, "{turned}");
+                        }
+                    }
+                    _ => {
+                        same += 1;
+                        assert_eq!(format!("{own:?}"), format!("{kept:?}"));
+                    }
+                }
+            }
+        }
+        assert!(held >= 10 && same >= 10, "held {held}, same {same}");
     }
 }
