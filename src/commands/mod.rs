@@ -76,20 +76,27 @@ pub fn report_warnings(sources: &SourceMap, warnings: &[Warning], json: bool) {
     }
 }
 
-/// One line that says what a clean compilation holds.
+/// One line that says what a clean compilation holds ("1 file: 1 cell,
+/// 5 products, ...").
 pub fn summary_line(c: &Compiled) -> String {
     let m = &c.model;
     let x = &c.expanded;
+    let counted =
+        |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
     format!(
-        "{} files: {} cells, {} products, {} inventories, {} orders, {} demonstrations ({} samples), {} scenarios in {} suites",
-        c.sources.files().count(),
-        m.cells.len(),
-        m.products.len(),
-        m.inventories.len(),
-        m.orders.len(),
-        x.demonstration_count(),
-        c.shape.samples,
-        x.suites.iter().map(|s| s.cases.len()).sum::<usize>(),
-        x.suites.len(),
+        "{}: {}, {}, {}, {}, {} ({}), {} in {}",
+        counted(c.sources.files().count(), "file", "files"),
+        counted(m.cells.len(), "cell", "cells"),
+        counted(m.products.len(), "product", "products"),
+        counted(m.inventories.len(), "inventory", "inventories"),
+        counted(m.orders.len(), "order", "orders"),
+        counted(x.demonstration_count(), "demonstration", "demonstrations"),
+        counted(c.shape.samples, "sample", "samples"),
+        counted(
+            x.suites.iter().map(|s| s.cases.len()).sum::<usize>(),
+            "scenario",
+            "scenarios"
+        ),
+        counted(x.suites.len(), "suite", "suites"),
     )
 }
