@@ -16,8 +16,8 @@ mod guards;
 mod regrip;
 mod steps;
 
+use steps::{Hold, MORE_STEPS, policy_steps_near};
 pub use steps::{MAX_POLICY_STEPS, REACHED, REACHED_VIA, cup_down, policy_steps, tolerance};
-use steps::{MORE_STEPS, policy_steps_held, policy_steps_near};
 
 use super::reasoner::{f32s, graph, in_slot, lifted};
 use super::station::{
@@ -181,6 +181,23 @@ impl<W: World> Learned<'_, W> {
         self.policy.action(f32s(delta), joints.map(|v| v as f32))
     }
 
+    /// The policy's steps from `start` towards `goal`
+    /// ([`policy_steps_near`]) with this cell's arm, base and cup.
+    #[allow(clippy::too_many_arguments)]
+    fn steps(
+        &self,
+        more: usize,
+        hold: Hold,
+        start: Joints,
+        goal: [f64; 3],
+        tolerance: f64,
+        act: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
+    ) -> Result<Vec<Joints>, Shortfall> {
+        let s = &self.station;
+        let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
+        policy_steps_near(more, hold, arm, base, suction, start, goal, tolerance, act)
+    }
+
     /// The dynamics policy's motion from `start` to `goal`: the checked
     /// commands, or why not. The steps' end point is joined straight when
     /// that is free, else (with [`Ways::All`]) down the vertical, through
@@ -199,11 +216,9 @@ impl<W: World> Learned<'_, W> {
         let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
         // Steps that spiral in on the goal, a little short of it, go on
         // for a few more (the first shortfall is the one reported).
-        let steps = policy_steps_near(
+        let steps = self.steps(
             MORE_STEPS,
-            arm,
-            base,
-            suction,
+            Hold::Nothing,
             start,
             goal,
             tolerance,
@@ -218,39 +233,43 @@ impl<W: World> Learned<'_, W> {
                 action
             },
         );
-        // Steps that overshoot the shoulder's or the elbow's limit on the
-        // way (an elbow folded near its limit to reach near the base):
-        // those joints held inside their limits.
-        let steps = match steps {
-            Err(Shortfall::Limits {
-                joint: Some(1 | 2), ..
-            }) => policy_steps_held(
-                MORE_STEPS,
-                arm,
-                base,
-                suction,
-                start,
-                goal,
-                tolerance,
-                &mut |q, delta| self.act(q, delta),
-            )
-            .or(steps),
-            steps => steps,
-        };
         // A goal far round the base the policy fell short of: through a
         // via point half way round, the way the base has room.
         let steps = steps.or_else(|why| {
             let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
             let from: [f64; 3] = s.tip(&start);
             let via = swing_via(base, start[0], from, goal).ok_or(why.clone())?;
-            let mut steps = policy_steps_held(0, arm, base, suction, start, via, REACHED_VIA, act)
+            let mut steps = self
+                .steps(0, Hold::ShoulderElbow, start, via, REACHED_VIA, act)
                 .map_err(|_| why.clone())?;
             let near = steps.last().copied().unwrap_or(start);
-            let rest = policy_steps_held(0, arm, base, suction, near, goal, tolerance, act)
+            let rest = self
+                .steps(0, Hold::ShoulderElbow, near, goal, tolerance, act)
                 .map_err(|_| why)?;
             steps.extend(rest);
             Ok(steps)
-        })?;
+        });
+        // Steps that overshoot the shoulder's or the elbow's limit on the
+        // way (an elbow folded near its limit to reach near the base),
+        // where no swing through a via point helps: those joints held
+        // inside their limits. After the swing: near half a turn, the
+        // held steps may go the long way round (probe cell 6003: a hover
+        // 188 degrees round, 3.7 s more than through the swing's via).
+        let steps = match steps {
+            Err(Shortfall::Limits {
+                joint: Some(1 | 2), ..
+            }) => self
+                .steps(
+                    MORE_STEPS,
+                    Hold::ShoulderElbow,
+                    start,
+                    goal,
+                    tolerance,
+                    &mut |q, delta| self.act(q, delta),
+                )
+                .or(steps),
+            steps => steps,
+        }?;
         let Some(last) = steps.last() else {
             return Ok(Route {
                 waypoints: Vec::new(),
@@ -367,7 +386,7 @@ impl<W: World> Learned<'_, W> {
         then: &mut dyn FnMut(&Route) -> Option<T>,
     ) -> Option<(Route, T)> {
         let s = &self.station;
-        let (arm, base, suction) = (s.arm, &s.base, s.task.cell.suction);
+        let (arm, base) = (s.arm, &s.base);
         let own = arm.ur_branch(base, &start)?;
         let flange = arm.flange_pose(base, &start);
         let branches = arm.ur_ik_branches(base, &flange, &start);
@@ -386,9 +405,9 @@ impl<W: World> Learned<'_, W> {
             .into_iter()
             .filter_map(|b| {
                 let from = (*branches.get(b)?)?;
-                let steps =
-                    policy_steps_near(MORE_STEPS, arm, base, suction, from, goal, tolerance, act)
-                        .ok()?;
+                let steps = self
+                    .steps(MORE_STEPS, Hold::Nothing, from, goal, tolerance, act)
+                    .ok()?;
                 let last = steps.last().copied().unwrap_or(from);
                 let end = arm.into_limits(&held_at_limits(arm, &from, last), &from)?;
                 let end = with_room(arm, &from, end);
@@ -407,8 +426,7 @@ impl<W: World> Learned<'_, W> {
         // expert's hover over a flat product beside a crate is in the
         // elbow's other shape.
         if matches!(shapes, Shapes::Others)
-            && let Ok(steps) =
-                policy_steps_near(MORE_STEPS, arm, base, suction, start, goal, tolerance, act)
+            && let Ok(steps) = self.steps(MORE_STEPS, Hold::Nothing, start, goal, tolerance, act)
             && let Some(&last) = steps.last()
             && let Some(reached) = arm.into_limits(&held_at_limits(arm, &start, last), &start)
         {

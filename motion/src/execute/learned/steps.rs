@@ -127,7 +127,17 @@ pub fn policy_steps(
     tolerance: f64,
     action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
 ) -> Result<Vec<Joints>, Shortfall> {
-    policy_steps_near(0, arm, base, suction, start, goal, tolerance, action)
+    policy_steps_near(
+        0,
+        Hold::Nothing,
+        arm,
+        base,
+        suction,
+        start,
+        goal,
+        tolerance,
+        action,
+    )
 }
 
 /// How close (m) the policy's [`MAX_POLICY_STEPS`] steps must have come
@@ -142,83 +152,37 @@ pub const NEAR_MISS: f64 = 0.01;
 /// [`NEAR_MISS`] of its goal, beyond [`MAX_POLICY_STEPS`].
 pub const MORE_STEPS: usize = 15;
 
-/// [`policy_steps`], going on for up to `more` steps where the first
-/// [`MAX_POLICY_STEPS`] end within [`NEAR_MISS`] of the goal; where those
-/// fall short too (or leave the limits), the shortfall after
-/// [`MAX_POLICY_STEPS`] is the one returned.
-#[allow(clippy::too_many_arguments)]
-pub fn policy_steps_near(
-    more: usize,
-    arm: &Arm,
-    base: &Isometry3<f64>,
-    suction: f64,
-    start: Joints,
-    goal: [f64; 3],
-    tolerance: f64,
-    action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
-) -> Result<Vec<Joints>, Shortfall> {
-    steps_toward(
-        Hold::No,
-        more,
-        arm,
-        base,
-        suction,
-        start,
-        goal,
-        tolerance,
-        action,
-    )
-}
-
-/// How far inside its limits (rad) [`policy_steps_held`] holds the
+/// How far inside its limits (rad) [`Hold::ShoulderElbow`] holds the
 /// shoulder and the elbow.
 pub(super) const HOLD_MARGIN: f64 = 0.01;
 
-/// [`policy_steps_near`] with the shoulder and the elbow held
-/// [`HOLD_MARGIN`] inside their limits: a step that would take either
-/// past is cut short there (the wrist turned with the step as cut, so the
-/// cup stays down), and the other joints' steps go on. Steps that stay
-/// within the limits are [`policy_steps_near`]'s, bit for bit. Near the base, an
-/// elbow folded to reach a product a few tenths of a metre out is close
-/// to its limit, and the policy's steps overshoot it on the way before
-/// they come back (probe cell 6003 reversed: the elbow to 3.209 rad for a
-/// goal the arm reaches at 3.0). For the learned loop only: DAgger's
-/// rollouts, and the policy as taught, step without it.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn policy_steps_held(
-    more: usize,
-    arm: &Arm,
-    base: &Isometry3<f64>,
-    suction: f64,
-    start: Joints,
-    goal: [f64; 3],
-    tolerance: f64,
-    action: &mut dyn FnMut(&Joints, [f64; 3]) -> [f32; 3],
-) -> Result<Vec<Joints>, Shortfall> {
-    steps_toward(
-        Hold::ShoulderElbow,
-        more,
-        arm,
-        base,
-        suction,
-        start,
-        goal,
-        tolerance,
-        action,
-    )
-}
-
-/// Whether [`steps_toward`] holds joints inside their limits.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Hold {
-    No,
+/// Whether the policy's steps are held inside the joints' limits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Hold {
+    /// A step that leaves the limits ends the steps
+    /// ([`Shortfall::Limits`]): the policy as taught, and DAgger's
+    /// rollouts.
+    Nothing,
+    /// A step that would take the shoulder or the elbow past its limit
+    /// is cut short [`HOLD_MARGIN`] inside it (the wrist turned with the
+    /// step as cut, so the cup stays down), and the other joints' steps
+    /// go on; steps that stay within the limits are
+    /// [`Hold::Nothing`]'s, bit for bit. Near the base, an elbow folded
+    /// to reach a product a few tenths of a metre out is close to its
+    /// limit, and the policy's steps overshoot it on the way before they
+    /// come back (probe cell 6003 reversed: the elbow to 3.209 rad for a
+    /// hover the expert reaches at 2.754). For the learned loop only.
     ShoulderElbow,
 }
 
+/// [`policy_steps`], holding the joints as `hold` says, going on for up
+/// to `more` steps where the first [`MAX_POLICY_STEPS`] end within
+/// [`NEAR_MISS`] of the goal; where those fall short too (or leave the
+/// limits), the shortfall after [`MAX_POLICY_STEPS`] is the one returned.
 #[allow(clippy::too_many_arguments)]
-fn steps_toward(
-    hold: Hold,
+pub fn policy_steps_near(
     more: usize,
+    hold: Hold,
     arm: &Arm,
     base: &Isometry3<f64>,
     suction: f64,
@@ -336,6 +300,48 @@ mod tests {
         }
     }
 
+    /// Numbers in [-1, 1), the same for a seed on every machine.
+    fn numbers(seed: u64) -> impl FnMut() -> f64 {
+        let mut x = seed;
+        move || {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((x >> 40) as f64 / (1u64 << 24) as f64) * 2.0 - 1.0
+        }
+    }
+
+    /// The arm with the cup down over a random point in front of it, or
+    /// `None` where that is out of reach.
+    fn cup_down_start(
+        arm: &Arm,
+        base: &Isometry3<f64>,
+        suction: f64,
+        next: &mut impl FnMut() -> f64,
+    ) -> Option<Joints> {
+        let tip = Point3::new(0.5 + 0.3 * next(), 0.4 * next(), 0.3 + 0.1 * next());
+        arm.tool_down_ik(
+            base,
+            tip,
+            next(),
+            suction,
+            &[0.0, -1.5, 1.5, -1.6, -1.6, 0.0],
+        )
+    }
+
+    /// `n` small random actions.
+    fn wandering(next: &mut impl FnMut() -> f64, n: usize) -> Vec<[f32; 3]> {
+        (0..n)
+            .map(|_| {
+                [
+                    0.1 * next() as f32,
+                    0.1 * next() as f32,
+                    0.1 * next() as f32,
+                ]
+            })
+            .collect()
+    }
+
     /// Random actions from cup-down starts give the very same steps and
     /// shortfalls as forward kinematics at every use (the distance left
     /// to within 1e-9 m: the tip is in closed form after the first step):
@@ -346,34 +352,13 @@ mod tests {
         let arm = Arm::ur10();
         let base = Isometry3::translation(0.1, -0.2, 0.05);
         let suction = 0.12;
-        let mut x = 17u64;
-        let mut next = move || {
-            x = x
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((x >> 40) as f64 / (1u64 << 24) as f64) * 2.0 - 1.0
-        };
+        let mut next = numbers(17);
         let mut outcomes = Vec::new();
         for _ in 0..40 {
-            let tip = Point3::new(0.5 + 0.3 * next(), 0.4 * next(), 0.3 + 0.1 * next());
-            let Some(start) = arm.tool_down_ik(
-                &base,
-                tip,
-                next(),
-                suction,
-                &[0.0, -1.5, 1.5, -1.6, -1.6, 0.0],
-            ) else {
+            let Some(start) = cup_down_start(&arm, &base, suction, &mut next) else {
                 continue;
             };
-            let wander: Vec<[f32; 3]> = (0..MAX_POLICY_STEPS)
-                .map(|_| {
-                    [
-                        0.1 * next() as f32,
-                        0.1 * next() as f32,
-                        0.1 * next() as f32,
-                    ]
-                })
-                .collect();
+            let wander = wandering(&mut next, MAX_POLICY_STEPS);
             // The elbow bends on until it leaves its limits.
             let bend: Vec<[f32; 3]> = wander.iter().map(|a| [a[0], a[1], 0.1]).collect();
             // A goal out of reach, and the tip after a few of the actions.
@@ -432,37 +417,16 @@ mod tests {
         let arm = Arm::ur10();
         let base = Isometry3::translation(0.0, 0.0, 0.0);
         let suction = 0.12;
-        let mut x = 29u64;
-        let mut next = move || {
-            x = x
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((x >> 40) as f64 / (1u64 << 24) as f64) * 2.0 - 1.0
-        };
+        let mut next = numbers(29);
         let (mut same, mut held) = (0, 0);
         for _ in 0..60 {
-            let tip = Point3::new(0.5 + 0.3 * next(), 0.4 * next(), 0.3 + 0.1 * next());
-            let Some(start) = arm.tool_down_ik(
-                &base,
-                tip,
-                next(),
-                suction,
-                &[0.0, -1.5, 1.5, -1.6, -1.6, 0.0],
-            ) else {
+            let Some(start) = cup_down_start(&arm, &base, suction, &mut next) else {
                 continue;
             };
             let down = arm.flange_pose(&base, &start).rotation;
             // Wandering steps, and steps folding the elbow (or lowering
             // the shoulder) until it would leave its limit.
-            let wander: Vec<[f32; 3]> = (0..MAX_POLICY_STEPS + MORE_STEPS)
-                .map(|_| {
-                    [
-                        0.1 * next() as f32,
-                        0.1 * next() as f32,
-                        0.1 * next() as f32,
-                    ]
-                })
-                .collect();
+            let wander = wandering(&mut next, MAX_POLICY_STEPS + MORE_STEPS);
             let fold: Vec<[f32; 3]> = wander.iter().map(|a| [a[0], a[1], 1.0]).collect();
             let lower: Vec<[f32; 3]> = wander.iter().map(|a| [a[0], -1.0, a[2]]).collect();
             let far = [3.0, 0.0, 0.5];
@@ -470,24 +434,18 @@ mod tests {
                 // The joints each step left the arm in (the policy is
                 // asked from each).
                 let mut seen: Vec<Joints> = Vec::new();
-                let mut run = |hold: bool| {
+                let mut run = |hold: Hold| {
                     seen.clear();
                     let action = &mut |q: &Joints, _: [f64; 3]| {
                         seen.push(*q);
                         actions[seen.len() - 1]
                     };
-                    if hold {
-                        policy_steps_held(
-                            MORE_STEPS, &arm, &base, suction, start, far, 0.01, action,
-                        )
-                    } else {
-                        policy_steps_near(
-                            MORE_STEPS, &arm, &base, suction, start, far, 0.01, action,
-                        )
-                    }
+                    policy_steps_near(
+                        MORE_STEPS, hold, &arm, &base, suction, start, far, 0.01, action,
+                    )
                 };
-                let own = run(false);
-                let kept = run(true);
+                let own = run(Hold::Nothing);
+                let kept = run(Hold::ShoulderElbow);
                 match &own {
                     Err(Shortfall::Limits {
                         joint: Some(1 | 2), ..
