@@ -214,6 +214,12 @@ pub enum Error {
         /// Picking: the empty cell allows the pose, the product itself
         /// does not (the wrist over a short cup meets it).
         meets_itself: bool,
+        /// Picking: the way [`REACH_PROBE`] along the line from the
+        /// robot's base axis that the product would be picked, where one
+        /// way is and the other is not (a product too near the base, on
+        /// a riser, folds the forearm into the base; one too far out is
+        /// beyond the arm).
+        reached_moved: Option<Moved>,
     },
     #[error(
         "the robot cannot start in cell `{cell}` while the products of inventory `{inventory}` stand there: every start pose over the middle of the `pending` area meets `{by}`"
@@ -543,6 +549,7 @@ impl Error {
             Error::Unreachable { meets_itself: true, .. } => "with the cup on the product's top face, the arm's wrist (or the cup's own body) meets the product itself: the cup is too short for this arm. Use a longer cup (`suction`)".into(),
             Error::Unreachable { pose: Pose::TopFace, tip, .. } if tip[2] <= THIN_TOP_FACE => format!("the top face is {:.0} mm above the table, and the cup is kept a few millimetres clear of everything but the product it picks: it would meet the table, wherever the product stands. Check the product's height; one thinner than {:.0} mm cannot be picked by this cup", tip[2] * 1000.0, THIN_TOP_FACE * 1000.0 + 1.0),
             Error::Unreachable { pose, tip, .. } if pose.is_picking() && tip[2] > HIGH_TIP => format!("the tool tip would be {:.2} m above the table, over the product's top face: check the product's height (sizes are metres unless they carry `mm` or `cm`); a product this tall can be picked only near the robot's base, with a low `lift` and a short cup (`suction`)", tip[2]),
+            Error::Unreachable { pose, reached_moved: Some(Moved::Away), .. } if pose.is_picking() => format!("the product stands too near the robot's base for the arm to fold over it; {:.0} mm further out it can be picked: move it away from the base (or the `base` away from the products)", REACH_PROBE * 1000.0),
             Error::Unreachable { pose, .. } if pose.is_picking() => "move the product nearer the robot's base (or the `base` nearer the products), or lower the cell's `lift`; the cup (`suction`) reaches down from the wrist, so a shorter cup reaches further".into(),
             Error::Unreachable { pose: Pose::Approach, .. } => "the robot carries the product round its base axis, at the lift's height or clear of the box's rim if that is higher, half-way between the product and the slot: bring the product and the slot nearer each other, lower the cell's `lift`, or use a lower box".into(),
             Error::Unreachable { .. } => "move the slot (or its box) nearer the robot's base, or use a lower box: the product is held above the rim before it goes down".into(),
@@ -596,4 +603,18 @@ fn metres(m: f64) -> String {
     } else {
         format!("{m:.1e} m")
     }
+}
+
+/// How far (m) an unreachable pick is tried further from and nearer the
+/// robot's base axis, to say which way it would be reached
+/// ([`Error::Unreachable`]'s `reached_moved`).
+pub const REACH_PROBE: f64 = 0.05;
+
+/// Which way along the line from the robot's base axis a pose is reached.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Moved {
+    /// Further from the base axis.
+    Away,
+    /// Nearer it.
+    Nearer,
 }

@@ -21,7 +21,7 @@
 //! the order packed (each of them anywhere the blocks' `jitter` may put
 //! it: its footprint widened by the largest).
 
-use crate::error::Error;
+use crate::error::{Error, Moved, REACH_PROBE};
 use crate::model::{Choose, Inventory, Model, Placed, RobotModel};
 use crate::source::Loc;
 use crate::warning::Warning;
@@ -285,6 +285,7 @@ impl Asker<'_> {
         }
         let unreached = self.ws.pick(self.m, inv.cell, product, at);
         if let Some(u) = unreached {
+            let reached_moved = self.reached_moved(inv.cell, product, at);
             self.errors.push(Error::Unreachable {
                 at: loc,
                 task: Task::Pick {
@@ -294,10 +295,30 @@ impl Asker<'_> {
                 pose: u.pose,
                 tip: u.tip,
                 meets_itself: u.meets_itself,
+                reached_moved,
             });
         }
         self.picked.insert(place, unreached.is_none());
         unreached.is_none()
+    }
+
+    /// The way [`REACH_PROBE`] along the line from the cell's base axis
+    /// that `product`, unreachable at `at`, would be picked, where only
+    /// one way is.
+    fn reached_moved(&self, cell: usize, product: usize, at: [f64; 2]) -> Option<Moved> {
+        let base = self.m.cells.get(cell)?.base;
+        let (dx, dy) = (at[0] - base[0], at[1] - base[1]);
+        let d = dx.hypot(dy);
+        if d < 1e-9 {
+            return None;
+        }
+        let moved = |by: f64| [at[0] + by * dx / d, at[1] + by * dy / d];
+        let reached = |by: f64| self.ws.pick(self.m, cell, product, moved(by)).is_none();
+        match (reached(REACH_PROBE), reached(-REACH_PROBE)) {
+            (true, false) => Some(Moved::Away),
+            (false, true) => Some(Moved::Nearer),
+            _ => None,
+        }
     }
 
     /// Placing is asked once its picking was reached (the placing poses
@@ -325,6 +346,7 @@ impl Asker<'_> {
                 pose: u.pose,
                 tip: u.tip,
                 meets_itself: u.meets_itself,
+                reached_moved: None,
             }),
             Ok(Released {
                 drop: Some(drop),
@@ -426,6 +448,7 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> (Vec<Error>, Vec<Warning>) {
                 pose: u.pose,
                 tip: u.tip,
                 meets_itself: u.meets_itself,
+                reached_moved: None,
             });
         } else {
             started.insert(i);
