@@ -400,6 +400,68 @@ fn two_cells_sharing_products_in_opposite_orders_each_keep_their_own() {
     assert_eq!(rule_of("right"), "descending", "{report}");
 }
 
+/// Demonstrations the expert replays none of (a helper's probe cell: a
+/// carafe 177 mm tall stands 0.36 m from the base, and the upper arm
+/// meets it on the way to every pick of `soap` beside it): `train` named
+/// none of them and said only "no sub-goal samples to learn from". Each
+/// is now named in an `error:` line, as when only some fail, and the
+/// command stops (exit 2) with nothing written.
+#[test]
+fn train_names_every_demonstration_when_none_replays() {
+    let dir = scratch("learning", "none-replayed");
+    let compiled = compiled_text(&dir, CARAFE_IN_THE_WAY);
+    let model = dir.join("model");
+    let out = short_train(&compiled, &model.display().to_string());
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    for demo in ["o_d1", "o_d2"] {
+        assert!(
+            stderr.lines().any(|l| l
+                .starts_with("error: the expert could not replay demonstration")
+                && l.contains(&format!("`{demo}`"))),
+            "{demo}: {}",
+            text(&out)
+        );
+    }
+    assert!(
+        stderr.contains("could not replay any of the 2 demonstrations"),
+        "{}",
+        text(&out)
+    );
+    assert!(!model.exists(), "a model was written");
+}
+
+/// A carafe standing in the arm's way to `soap`.
+const CARAFE_IN_THE_WAY: &str = r#"cell crowded {
+  robot ur10
+  base (0.046, 0.152, 0.000)
+  suction 180 mm
+  pending (-0.124, 0.342) to (0.365, 1.192)
+  box tote (0.549, -0.212) size (674 mm, 356 mm, 77 mm)
+  slot s1 (0.310, -0.290)
+  slot s2 (0.469, -0.290)
+  lift 250 mm
+}
+product carafe box (114 mm, 94 mm, 177 mm)
+product kelp box (65 mm, 59 mm, 62 mm)
+product soap cube 54 mm mass 0.93
+inventory shelf for crowded {
+  carafe (-0.052, 0.498)
+  kelp (0.105, 1.090)
+  soap (0.314, 0.436)
+}
+order o for shelf {
+  kelp -> s2
+  soap -> s1
+}
+demo o_d1 for o {
+  sequence soap, kelp
+}
+demo o_d2 for o {
+  sequence soap, kelp
+}
+"#;
+
 /// Two lines, each with a tray of three slots.
 const TWO_LINES: &str = r#"cell left {
   robot ur10

@@ -5,6 +5,7 @@
 use crate::Exit;
 use crate::cli::TrainArgs;
 use crate::fsio::{check_replaceable, write_dir_atomically};
+use anyhow::bail;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use packwright_compiler::emit::Artifact;
 use packwright_motion::execute::MAX_POLICY_STEPS;
@@ -49,6 +50,17 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
     );
     let replayed = lesson.replay(&|| replaying.inc(1))?;
     replaying.finish_and_clear();
+    // Not one demonstration replayed: nothing to learn from. Each is
+    // named, as when only some were not, before the command stops.
+    let failed = replayed.failures().len();
+    if failed > 0 && failed == lesson.chosen.len() {
+        for p in replayed.problems.iter().filter(|p| !p.rehearsal) {
+            errln!("error: {p}");
+        }
+        bail!(
+            "the expert could not replay any of the {failed} demonstrations (each named in its own `error:` line), so there is nothing to learn from and no model was written: `packwright check` the file, and `packwright demonstrate` shows each run"
+        );
+    }
 
     let mut config = TrainConfig {
         seed: args.seed,
