@@ -198,6 +198,26 @@ impl From<WorldError> for Failure {
     }
 }
 
+impl Failure {
+    /// The sub-goal (from 1) a planning failure is about, if it is one.
+    pub fn subgoal(&self) -> Option<usize> {
+        match self {
+            Failure::Unreachable { subgoal, .. }
+            | Failure::NoPath { subgoal }
+            | Failure::NonFiniteSubGoal { subgoal }
+            | Failure::WouldCollide { subgoal, .. }
+            | Failure::Smoothing { subgoal, .. }
+            | Failure::OutOfTime { subgoal, .. } => Some(*subgoal),
+            Failure::Collision { .. }
+            | Failure::World { .. }
+            | Failure::Disappeared
+            | Failure::Misplaced { .. }
+            | Failure::NotGripped { .. }
+            | Failure::MovedLater => None,
+        }
+    }
+}
+
 impl fmt::Display for Failure {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -574,6 +594,23 @@ pub struct ProductReport {
     pub turn: Option<usize>,
     #[serde(flatten)]
     pub outcome: Outcome,
+    /// Where a failure at a sub-goal ([`Failure::subgoal`]) happened:
+    /// picking or placing (sub-goal 1 of either is a long motion, and
+    /// "sub-goal 1" alone reads the same for both); `None` otherwise, and
+    /// for the way back up from a release.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failed_in: Option<Stage>,
+}
+
+impl ProductReport {
+    /// Its outcome for people, saying the stage of a failure at a
+    /// sub-goal ("failed while placing: the motion to sub-goal 1 ...").
+    pub fn outcome_text(&self) -> String {
+        match (&self.outcome, self.failed_in) {
+            (Outcome::Failed(why), Some(stage)) => format!("failed while {stage}: {why}"),
+            (outcome, _) => outcome.to_string(),
+        }
+    }
 }
 
 /// Planning times, microseconds of wall clock.
@@ -668,7 +705,10 @@ impl Report {
             .products
             .iter()
             .find_map(|p| match &p.outcome {
-                Outcome::Failed(why) => Some(format!("{}: {why}", p.product)),
+                Outcome::Failed(why) => Some(match p.failed_in {
+                    Some(stage) => format!("{}, {stage}: {why}", p.product),
+                    None => format!("{}: {why}", p.product),
+                }),
                 _ => None,
             })
             .or_else(|| {
@@ -709,6 +749,7 @@ mod tests {
 
     fn row(product: &str, outcome: Outcome) -> ProductReport {
         ProductReport {
+            failed_in: None,
             turn: None,
             product: product.into(),
             slot: "s".into(),

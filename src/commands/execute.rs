@@ -305,7 +305,7 @@ fn print_report(name: &str, report: &Report, clock: &str) {
             exec,
             bound,
             error,
-            p.outcome
+            p.outcome_text()
         );
     }
     let count = |f: fn(&Outcome) -> bool| report.products.iter().filter(|p| f(&p.outcome)).count();

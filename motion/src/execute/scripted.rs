@@ -309,6 +309,7 @@ impl<W: World> Scripted<'_, W> {
         let lifting = self.station.checker.lifting(gripped.clone(), None);
         let picking_loads = [free, free, Load::holding(&lifting)];
         let from = self.station.backup_end().unwrap_or(obs.joints);
+        self.station.stage = Some(Stage::Picking);
         let pick = StageInfo {
             stage: Stage::Picking,
             feature: centre,
@@ -358,6 +359,7 @@ impl<W: World> Scripted<'_, W> {
                 .lowering(held.clone(), expert::released_centre(slot, h), 0.0);
         let loads = [carrying, carrying, Load::holding(&lowered)];
         let from = leg_end(&lift).unwrap_or(obs.joints);
+        self.station.stage = Some(Stage::Placing);
         let plan = match self.plan_stage(from, &placing, 0.0, loads) {
             Ok(plan) => plan,
             // No free way down into the slot from the point above it in
@@ -385,6 +387,7 @@ impl<W: World> Scripted<'_, W> {
             suction: Suction::Keep,
         }];
         let left = Load::released(name);
+        self.station.stage = None;
         let plan = self.plan_stage(obs.joints, &up, 0.0, [left; 3])?;
         // Kept, to be sent with the next product's hover.
         self.run_stage(plan, 0.0, [left; 3], None, Vec::new(), true)
@@ -478,7 +481,7 @@ pub(super) fn run<W: World>(
                 });
                 runner.station.measure(report, p, s);
                 let unmoved = runner.station.unmoved(p, Some(stood));
-                if let Err(why) = judge(report, result, unmoved) {
+                if let Err(why) = judge(report, result, unmoved, runner.station.stage) {
                     stopped = true;
                     if let Failure::Collision { contact } = why {
                         collisions.push(contact);

@@ -16,7 +16,7 @@ use crate::rrt::{self, Query, RrtConfig};
 use crate::smoothing::lower_bound;
 use nalgebra::{Isometry3, Point3};
 use packwright_interface::outcome::{
-    Budget, Disturbance, Failure, Hit, Outcome, PlannerKind, ProductReport, Report, Timing,
+    Budget, Disturbance, Failure, Hit, Outcome, PlannerKind, ProductReport, Report, Stage, Timing,
 };
 use packwright_interface::world::{Contact, Observation, Seen, World};
 use packwright_interface::{CellScene, OrderTask};
@@ -272,6 +272,10 @@ pub(crate) struct Station<'a, W: World> {
     /// When the sub-goal being planned must be done (RRT-Connect stops
     /// searching then).
     pub deadline: Option<Instant>,
+    /// The stage being planned or run (`None` for the way back up from a
+    /// release): where a failure at a sub-goal happened
+    /// (`ProductReport::failed_in`).
+    pub stage: Option<Stage>,
     /// The way back up from the last release, checked but not sent yet.
     backup: Option<Backup>,
     /// How many products the robot has handled ([`Station::measure`]).
@@ -316,6 +320,7 @@ impl<'a, W: World> Station<'a, W> {
             budget: PlanningBudget::default(),
             package_planning: Duration::ZERO,
             deadline: None,
+            stage: None,
             backup: None,
             handled: 0,
         }
@@ -1108,6 +1113,7 @@ impl<'a, W: World> Station<'a, W> {
             error_m: None,
             turn: None,
             outcome: packwright_interface::Outcome::NotAttempted,
+            failed_in: None,
         }
     }
 
@@ -1249,7 +1255,9 @@ pub(crate) fn judge(
     row: &mut ProductReport,
     result: Result<(), Failure>,
     unmoved: bool,
+    stage: Option<Stage>,
 ) -> Result<(), Failure> {
+    row.failed_in = result.as_ref().err().and_then(Failure::subgoal).and(stage);
     let result = result.and_then(|()| match row.error_m {
         Some(e) if e <= SUCCESS_RADIUS => Ok(()),
         Some(error_m) if unmoved => Err(Failure::NotGripped { error_m }),

@@ -607,7 +607,8 @@ fn grips_offers_every_free_shape_nearest_first_and_grip_is_the_first() {
 /// A product the handling left more than the success radius from its
 /// goal is misplaced, or not gripped when it still stands where it was
 /// picked from (a learned grip beside a small product's face was
-/// reported as "released 1.399 m from its goal").
+/// reported as "released 1.399 m from its goal"). Neither is a failure
+/// at a sub-goal: no stage is named for them.
 #[test]
 fn a_product_left_where_it_stood_was_not_gripped() {
     let row = |error_m| ProductReport {
@@ -619,18 +620,53 @@ fn a_product_left_where_it_stood_was_not_gripped() {
         error_m: Some(error_m),
         turn: Some(1),
         outcome: Outcome::NotAttempted,
+        failed_in: None,
     };
+    let placing = Some(Stage::Placing);
     let mut r = row(1.399);
     assert_eq!(
-        judge(&mut r, Ok(()), true),
+        judge(&mut r, Ok(()), true, placing),
         Err(Failure::NotGripped { error_m: 1.399 })
     );
+    assert_eq!(r.failed_in, None);
     let mut r = row(1.399);
     assert_eq!(
-        judge(&mut r, Ok(()), false),
+        judge(&mut r, Ok(()), false, placing),
         Err(Failure::Misplaced { error_m: 1.399 })
     );
     let mut r = row(0.001);
-    assert_eq!(judge(&mut r, Ok(()), true), Ok(()));
+    assert_eq!(judge(&mut r, Ok(()), true, placing), Ok(()));
     assert_eq!(r.outcome, Outcome::Packed);
+    assert_eq!(r.failed_in, None);
+}
+
+/// A failure at a sub-goal names its stage: "sub-goal 1" alone reads the
+/// same for the hover over a product and for the approach to the box (a
+/// helper read a placing approach as a pick's).
+#[test]
+fn a_failure_at_a_sub_goal_names_its_stage() {
+    let mut r = ProductReport {
+        product: "tea".into(),
+        slot: "s".into(),
+        planning_s: 0.0,
+        execution_s: 0.0,
+        bound_s: 0.0,
+        error_m: None,
+        turn: Some(1),
+        outcome: Outcome::NotAttempted,
+        failed_in: None,
+    };
+    let why = Failure::NoPath { subgoal: 1 };
+    assert_eq!(
+        judge(&mut r, Err(why.clone()), false, Some(Stage::Placing)),
+        Err(why)
+    );
+    assert_eq!(r.failed_in, Some(Stage::Placing));
+    assert_eq!(
+        r.outcome_text(),
+        "failed while placing: RRT-Connect found no path to sub-goal 1"
+    );
+    // The way back up from a release is no stage.
+    judge(&mut r, Err(Failure::NoPath { subgoal: 1 }), false, None).ok();
+    assert_eq!(r.failed_in, None);
 }

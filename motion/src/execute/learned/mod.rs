@@ -710,6 +710,7 @@ impl<W: World> Learned<'_, W> {
         pending: Vec<Leg>,
         keep_tail: bool,
     ) -> Result<(Reached, Vec<Leg>), Failure> {
+        self.station.stage = Some(plan.stage);
         let mut fallen = false;
         let mut goals = [[0.0; 3]; 3];
         let mut tips = [[0.0; 3]; 3];
@@ -1290,6 +1291,7 @@ impl<W: World> Learned<'_, W> {
     /// not sent: it is sent with the next product's hover (or alone at
     /// the end of the run).
     fn retreat(&mut self, above: [f64; 3], name: &str) -> Result<Leg, Failure> {
+        self.station.stage = None;
         let load = Load::released(name);
         // The released product where it lies (its last observed place was
         // under the cup). Observed before the planning is timed, as the
@@ -1441,7 +1443,7 @@ impl<W: World> Learned<'_, W> {
             Err(Halt::Failed(why)) => Err(why),
             Ok(()) => Ok(()),
         };
-        judge(&mut rows[row], handled, unmoved).map_err(Stopped::Failed)
+        judge(&mut rows[row], handled, unmoved, self.station.stage).map_err(Stopped::Failed)
     }
 
     /// Picks product `p` and places it in slot `s`, after the kept back-up
