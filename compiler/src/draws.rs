@@ -8,6 +8,13 @@
 //! positions, and the scenarios where a product stands in the way are
 //! named ([`Warning::DrawnPickBlocked`]).
 //!
+//! The same for reach: a pick E039 passes at the written place can be out
+//! of the arm's reach where a suite's jitter draws it (a product near a
+//! base on a riser, drawn nearer the base); the entries that a move by
+//! the jitter along the line from the base axis takes out of reach are
+//! asked again at each scenario's draw, and the scenarios named
+//! ([`Warning::DrawnOutOfReach`]).
+//!
 //! Invariants: only `scenarios` suites with a jitter are asked about, and
 //! only their picks that W001 does not already warn about (at the
 //! written places, the others widened by the jitter, the pick is free);
@@ -39,8 +46,84 @@ pub fn check(m: &Model, x: &Expanded, ws: &dyn Workspace) -> Vec<Warning> {
         for entry in suspects(m, s, ws) {
             warnings.extend(blocked_in(m, s, entry, &suite.cases, ws));
         }
+        for entry in near_the_edge(m, s, ws) {
+            warnings.extend(out_of_reach_in(m, s, entry, &suite.cases, ws));
+        }
     }
     warnings
+}
+
+/// The entries `s` may pick that the empty cell lets the robot pick at
+/// their written place (else E039) but not at one moved by the jitter
+/// along the line from the robot's base axis (√2 times it: a draw's
+/// farthest reach), nearer or farther: a few questions per entry, asked
+/// again at each scenario's draw only for these.
+fn near_the_edge(m: &Model, s: &ScenariosDef, ws: &dyn Workspace) -> Vec<usize> {
+    let inv = &m.inventories[s.inventory];
+    let Some(cell) = m.cells.get(inv.cell) else {
+        return Vec::new();
+    };
+    s.choose
+        .entries
+        .iter()
+        .copied()
+        .filter(|&k| {
+            let e = &inv.entries[k];
+            let (dx, dy) = (e.at[0] - cell.base[0], e.at[1] - cell.base[1]);
+            let d = dx.hypot(dy);
+            let moved = |by: f64| [e.at[0] + by * dx / d, e.at[1] + by * dy / d];
+            let reach = std::f64::consts::SQRT_2 * s.jitter;
+            d > 1e-9
+                && ws.pick(m, inv.cell, e.product, e.at).is_none()
+                && [reach, -reach]
+                    .iter()
+                    .any(|&by| ws.pick(m, inv.cell, e.product, moved(by)).is_some())
+        })
+        .collect()
+}
+
+/// The warning for entry `k` of `s`, if the empty cell does not let the
+/// robot pick it where some of the cases draw it.
+fn out_of_reach_in(
+    m: &Model,
+    s: &ScenariosDef,
+    k: usize,
+    cases: &[Case],
+    ws: &dyn Workspace,
+) -> Option<Warning> {
+    let inv = &m.inventories[s.inventory];
+    let cell = m.cells.get(inv.cell)?;
+    let entry = &inv.entries[k];
+    let from_base = |at: [f64; 2]| (at[0] - cell.base[0]).hypot(at[1] - cell.base[1]);
+    let written = from_base(entry.at);
+    let mut out: Vec<(String, crate::workspace::Pose, bool)> = Vec::new();
+    for case in cases {
+        let setup = &case.setup;
+        let picked = setup.slot_of(k).is_some() && !setup.human_packed.contains(&k);
+        let Some(&at) = setup.positions.get(k).filter(|_| picked) else {
+            continue;
+        };
+        if let Some(u) = ws.pick(m, inv.cell, entry.product, at) {
+            let name = case.name.rsplit('/').next().unwrap_or(&case.name);
+            out.push((name.to_owned(), u.pose, from_base(at) < written));
+        }
+    }
+    let (_, pose, first_nearer) = out.first()?.clone();
+    let nearer = out
+        .iter()
+        .all(|(_, _, n)| *n == first_nearer)
+        .then_some(first_nearer);
+    Some(Warning::DrawnOutOfReach {
+        at: s.jitter_loc.unwrap_or(s.loc),
+        suite: s.name.clone(),
+        suite_cases: s.count,
+        product: m.products[entry.product].name.clone(),
+        product_at: entry.loc,
+        pose,
+        cases: out.into_iter().map(|(name, ..)| name).collect(),
+        jitter_mm: s.jitter * 1000.0,
+        nearer,
+    })
 }
 
 /// The entries `s` may pick whose pick is free at the written places with

@@ -50,6 +50,29 @@ pub enum Warning {
         cases: Vec<String>,
         jitter_mm: f64,
     },
+    /// A product the robot picks at its written place (E039 asks only
+    /// there), but not in some of a suite's scenarios, where the jitter
+    /// draws it out of the arm's reach (a product near a base on a riser,
+    /// drawn nearer the base: the forearm meets the base).
+    DrawnOutOfReach {
+        /// The suite's `jitter` (else the suite).
+        at: Loc,
+        suite: String,
+        /// How many scenarios the suite has.
+        suite_cases: usize,
+        product: String,
+        /// Its inventory entry.
+        product_at: Loc,
+        /// The first pose not reached, in the first such scenario.
+        pose: Pose,
+        /// The scenarios where it is out of reach (their numbers).
+        cases: Vec<String>,
+        jitter_mm: f64,
+        /// Where every such draw lies: nearer the robot's base axis than
+        /// the written place (`Some(true)`), farther (`Some(false)`), or
+        /// either.
+        nearer: Option<bool>,
+    },
     /// Two products placed in neighbouring slots with less room between
     /// them than the planner keeps round a held product
     /// ([`HELD_ROOM`]): the second cannot be lowered past the first, so
@@ -174,6 +197,19 @@ impl fmt::Display for Warning {
                 cases.len(),
                 cases.join(", ")
             ),
+            Warning::DrawnOutOfReach {
+                suite,
+                suite_cases,
+                product,
+                pose,
+                cases,
+                ..
+            } => write!(
+                f,
+                "in {} of {suite_cases} scenarios of `{suite}` ({}) the robot cannot pick `{product}` where the jitter draws it: {pose} is out of its reach",
+                cases.len(),
+                cases.join(", ")
+            ),
             Warning::TooClose {
                 a,
                 slot_a,
@@ -217,6 +253,7 @@ impl Warning {
             Warning::PickBlocked { .. } => "W001",
             Warning::TooClose { .. } => "W002",
             Warning::DrawnPickBlocked { .. } => "W003",
+            Warning::DrawnOutOfReach { .. } => "W006",
             Warning::DroppedHigh { .. } => "W004",
             Warning::NoSequenceRule { .. } => "W005",
         }
@@ -228,6 +265,7 @@ impl Warning {
             Warning::PickBlocked { at, .. }
             | Warning::TooClose { at, .. }
             | Warning::DrawnPickBlocked { at, .. }
+            | Warning::DrawnOutOfReach { at, .. }
             | Warning::DroppedHigh { at, .. }
             | Warning::NoSequenceRule { at, .. } => *at,
         }
@@ -251,6 +289,9 @@ impl Warning {
                 "moves each product up to {jitter_mm:.0} mm, two products up to {:.0} mm nearer each other",
                 2.0 * jitter_mm
             ),
+            Warning::DrawnOutOfReach { jitter_mm, .. } => {
+                format!("moves each product up to {jitter_mm:.0} mm")
+            }
             Warning::DroppedHigh { drop_mm, .. } => format!("drops it {drop_mm:.0} mm"),
             Warning::NoSequenceRule { sequence, .. } => {
                 format!("handles {} in another order", sequence.join(", "))
@@ -268,6 +309,11 @@ impl Warning {
             Warning::DrawnPickBlocked { by, by_at, .. } => {
                 vec![(*by_at, format!("`{by}` stands here"))]
             }
+            Warning::DrawnOutOfReach {
+                product,
+                product_at,
+                ..
+            } => vec![(*product_at, format!("`{product}` is written here"))],
             Warning::DroppedHigh {
                 product,
                 product_at,
@@ -321,6 +367,22 @@ impl Warning {
             Warning::DrawnPickBlocked { product, by, .. } => format!(
                 "these scenarios can fail with every planner: move `{product}` and `{by}` further apart, or lower the jitter"
             ),
+            Warning::DrawnOutOfReach {
+                product, nearer, ..
+            } => {
+                let way = match nearer {
+                    Some(true) => format!(
+                        "move `{product}` further from the robot's base (the draws that fail lie nearer it)"
+                    ),
+                    Some(false) => format!(
+                        "move `{product}` nearer the robot's base (the draws that fail lie farther out)"
+                    ),
+                    None => format!("move `{product}` where the arm reaches round it"),
+                };
+                format!(
+                    "these scenarios fail with every planner: {way} by the jitter, or lower the jitter"
+                )
+            }
             Warning::TooClose { gap_mm, .. } => format!(
                 "the one packed second cannot be lowered past the other: it is let go above the other's top and can land on it; move the slots at least {:.1} mm further apart",
                 (HELD_ROOM * 1000.0 - gap_mm).max(0.1)
