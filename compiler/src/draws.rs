@@ -28,7 +28,7 @@
 use crate::expand::{Case, Expanded};
 use crate::model::{Model, ScenariosDef};
 use crate::warning::Warning;
-use crate::workspace::{Standing, Workspace};
+use crate::workspace::{Standing, Workspace, along_from_base};
 use packwright_grammar::ast::SequenceMode;
 use std::collections::BTreeMap;
 
@@ -69,15 +69,13 @@ fn near_the_edge(m: &Model, s: &ScenariosDef, ws: &dyn Workspace) -> Vec<usize> 
         .copied()
         .filter(|&k| {
             let e = &inv.entries[k];
-            let (dx, dy) = (e.at[0] - cell.base[0], e.at[1] - cell.base[1]);
-            let d = dx.hypot(dy);
-            let moved = |by: f64| [e.at[0] + by * dx / d, e.at[1] + by * dy / d];
             let reach = std::f64::consts::SQRT_2 * s.jitter;
-            d > 1e-9
-                && ws.pick(m, inv.cell, e.product, e.at).is_none()
-                && [reach, -reach]
-                    .iter()
-                    .any(|&by| ws.pick(m, inv.cell, e.product, moved(by)).is_some())
+            let out_of_reach = |by: f64| {
+                along_from_base(cell.base, e.at, by)
+                    .is_some_and(|moved| ws.pick(m, inv.cell, e.product, moved).is_some())
+            };
+            ws.pick(m, inv.cell, e.product, e.at).is_none()
+                && (out_of_reach(reach) || out_of_reach(-reach))
         })
         .collect()
 }

@@ -219,6 +219,14 @@ pub trait Workspace {
     }
 }
 
+/// `at` moved `by` (m) along the line from the base axis at `base`: away
+/// from it where `by` is positive. `None` on the axis itself.
+pub fn along_from_base(base: [f64; 3], at: [f64; 2], by: f64) -> Option<[f64; 2]> {
+    let (dx, dy) = (at[0] - base[0], at[1] - base[1]);
+    let d = dx.hypot(dy);
+    (d > 1e-9).then(|| [at[0] + by * dx / d, at[1] + by * dy / d])
+}
+
 /// A workspace that reaches everything: for tools that have no robot model
 /// (formatting, the compiler's own tests and benchmarks). Every command
 /// that executes or trains uses the robot's.
@@ -307,13 +315,10 @@ impl Asker<'_> {
     /// one way is.
     fn reached_moved(&self, cell: usize, product: usize, at: [f64; 2]) -> Option<Moved> {
         let base = self.m.cells.get(cell)?.base;
-        let (dx, dy) = (at[0] - base[0], at[1] - base[1]);
-        let d = dx.hypot(dy);
-        if d < 1e-9 {
-            return None;
-        }
-        let moved = |by: f64| [at[0] + by * dx / d, at[1] + by * dy / d];
-        let reached = |by: f64| self.ws.pick(self.m, cell, product, moved(by)).is_none();
+        let reached = |by: f64| {
+            along_from_base(base, at, by)
+                .is_some_and(|moved| self.ws.pick(self.m, cell, product, moved).is_none())
+        };
         match (reached(REACH_PROBE), reached(-REACH_PROBE)) {
             (true, false) => Some(Moved::Away),
             (false, true) => Some(Moved::Nearer),
