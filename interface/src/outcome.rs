@@ -344,6 +344,10 @@ pub enum Shortfall {
     /// (horizontally) from letting go with the product inside the walls,
     /// more than a learned release is moved.
     OverWall { by_m: f64 },
+    /// A release the arm reaches only with the product's bottom this far
+    /// (m) above its box's rim: let go there, it would fall that far and
+    /// more.
+    DropsFrom { height_m: f64 },
 }
 
 /// What a learned grip or release must be near ([`Shortfall::OffTarget`]).
@@ -376,6 +380,7 @@ impl Shortfall {
             Shortfall::Collides { .. } => "would collide",
             Shortfall::OffTarget { .. } => "off target",
             Shortfall::OverWall { .. } => "dropped onto a wall",
+            Shortfall::DropsFrom { .. } => "dropped from high",
         }
     }
 }
@@ -429,6 +434,11 @@ impl fmt::Display for Shortfall {
                 f,
                 "let go above the rim, the product would drop onto the box's wall ({:.1} mm from inside it)",
                 by_m * 1e3
+            ),
+            Shortfall::DropsFrom { height_m } => write!(
+                f,
+                "the release is reached only with the product {:.0} mm above its box's rim: it would fall that far and more",
+                height_m * 1e3
             ),
         }
     }

@@ -271,6 +271,14 @@ pub(super) fn nearer_middle(arm: &Arm, start: &Joints, end: &Joints) -> Option<J
 /// unless both are raised twice).
 pub(super) const COLLIDING_RELEASE_RAISE: f64 = 0.02;
 
+/// How far (m) above its box's rim a learned release may let the
+/// product's bottom go (it falls the rest of the way): in a deep carton
+/// the expert's own release rises to about the rim, where the arm cannot
+/// go lower; a release reached only higher is the expert's instead
+/// (helper R's cell 6210: the product let go 0.46 m over the rim fell
+/// onto the arm).
+pub(super) const MAX_ABOVE_RIM: f64 = 0.15;
+
 /// How far (m) a colliding release may be moved to keep its product and
 /// the cup inside the box's walls ([`Inside::keep`]; the policy then
 /// reaches it within [`BACK_UP_REACHED`]): about twice the

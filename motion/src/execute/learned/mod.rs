@@ -28,8 +28,8 @@ use super::{checked_samples, expected_next};
 use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
 use guards::{
-    COLLIDING_RELEASE_RAISE, Inside, KEEP_INSIDE, descent_vias, held_at_limits, level_vias,
-    nearer_middle, release_collides, shorter_turn, swing_via, with_room,
+    COLLIDING_RELEASE_RAISE, Inside, KEEP_INSIDE, MAX_ABOVE_RIM, descent_vias, held_at_limits,
+    level_vias, nearer_middle, release_collides, shorter_turn, swing_via, with_room,
 };
 use nalgebra::Vector3;
 use packwright_interface::outcome::{
@@ -1013,6 +1013,23 @@ impl<W: World> Learned<'_, W> {
                         None => {}
                     }
                 }
+                // A release reached only with the product far above its
+                // box's rim (the point above the slot raised over what
+                // stood under the carry, and the release from there raised
+                // as far as the expert's own from there would be): the
+                // product would fall that far (helper R's cell 6210: 0.46
+                // m over the rim, onto the arm). The expert's release
+                // instead. In a deep box the expert's own release rises to
+                // about the rim, and so may the learned one.
+                if switch == Suction::Off
+                    && plan.stage == Stage::Placing
+                    && let Ok(route) = &rolled
+                    && let Some(end) = route.waypoints.last()
+                    && let height_m = self.station.tip(end)[2] - plan.height - plan.feature[2]
+                    && height_m > MAX_ABOVE_RIM
+                {
+                    rolled = Err(Shortfall::DropsFrom { height_m });
+                }
                 if let Some(action_us) = first_action_us {
                     self.station.timing.network_us.push(subgoal_us + action_us);
                 }
@@ -1025,7 +1042,11 @@ impl<W: World> Learned<'_, W> {
             // would drop and land off its slot. The expert's release is
             // used instead, as for a release dropped onto a wall.
             let colliding = rolled.as_ref().is_some_and(|r| {
-                release_collides(switch, r) || matches!(r, Err(Shortfall::OverWall { .. }))
+                release_collides(switch, r)
+                    || matches!(
+                        r,
+                        Err(Shortfall::OverWall { .. } | Shortfall::DropsFrom { .. })
+                    )
             });
             let route = match rolled {
                 Some(Ok(route)) => {
