@@ -28,7 +28,7 @@
 use crate::expand::{Case, Expanded};
 use crate::model::{Model, ScenariosDef};
 use crate::warning::Warning;
-use crate::workspace::{Standing, Workspace, along_from_base};
+use crate::workspace::{Pose, Standing, Workspace, along_from_base};
 use packwright_grammar::ast::SequenceMode;
 use std::collections::BTreeMap;
 
@@ -94,16 +94,13 @@ fn out_of_reach_in(
     let entry = &inv.entries[k];
     let from_base = |at: [f64; 2]| (at[0] - cell.base[0]).hypot(at[1] - cell.base[1]);
     let written = from_base(entry.at);
-    let mut out: Vec<(String, crate::workspace::Pose, bool)> = Vec::new();
+    let mut out: Vec<(String, Pose, bool)> = Vec::new();
     for case in cases {
-        let setup = &case.setup;
-        let picked = setup.slot_of(k).is_some() && !setup.human_packed.contains(&k);
-        let Some(&at) = setup.positions.get(k).filter(|_| picked) else {
+        let Some(at) = picked_at(case, k) else {
             continue;
         };
         if let Some(u) = ws.pick(m, inv.cell, entry.product, at) {
-            let name = case.name.rsplit('/').next().unwrap_or(&case.name);
-            out.push((name.to_owned(), u.pose, from_base(at) < written));
+            out.push((number(case).to_owned(), u.pose, from_base(at) < written));
         }
     }
     let (_, pose, first_nearer) = out.first()?.clone();
@@ -158,6 +155,19 @@ fn suspects(m: &Model, s: &ScenariosDef, ws: &dyn Workspace) -> Vec<usize> {
         .collect()
 }
 
+/// Where `case` draws entry `k`, when the robot picks it there (its
+/// package places it, and no worker packed it first).
+fn picked_at(case: &Case, k: usize) -> Option<[f64; 2]> {
+    let setup = &case.setup;
+    let picked = setup.slot_of(k).is_some() && !setup.human_packed.contains(&k);
+    setup.positions.get(k).copied().filter(|_| picked)
+}
+
+/// A case's number within its suite, as warnings name it ("04").
+fn number(case: &Case) -> &str {
+    case.name.rsplit('/').next().unwrap_or(&case.name)
+}
+
 /// Whether entry `j` of inventory `i` is packed before entry `k`, by the
 /// order the inventory's `demos` blocks declare, when they all declare
 /// the same one (ascending or descending inventory order, or one `listed`
@@ -197,8 +207,7 @@ fn blocked_in(
     let mut by_other: BTreeMap<usize, Vec<String>> = BTreeMap::new();
     for case in cases {
         let setup = &case.setup;
-        let picked = setup.slot_of(k).is_some() && !setup.human_packed.contains(&k);
-        let Some(&at) = setup.positions.get(k).filter(|_| picked) else {
+        let Some(at) = picked_at(case, k) else {
             continue;
         };
         // The others standing when `k` is picked, with their entries: not
@@ -231,8 +240,7 @@ fn blocked_in(
             .and_then(|b| b.by)
             .and_then(|i| entries.get(i));
         if let Some(&j) = met {
-            let name = case.name.rsplit('/').next().unwrap_or(&case.name);
-            by_other.entry(j).or_default().push(name.to_owned());
+            by_other.entry(j).or_default().push(number(case).to_owned());
         }
     }
     let name = |j: usize| m.products[inv.entries[j].product].name.clone();

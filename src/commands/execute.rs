@@ -323,13 +323,10 @@ fn print_report(name: &str, report: &Report, clock: &str) {
         report.time_s
     );
     if report.planner == PlannerKind::Learned {
-        let plural = |n: usize| if n == 1 { "" } else { "s" };
         outln!(
-            "learned planner: {} fallback{} to RRT-Connect, {} violation{}",
-            report.fallbacks.len(),
-            plural(report.fallbacks.len()),
-            report.violations.len(),
-            plural(report.violations.len()),
+            "learned planner: {} to RRT-Connect, {}",
+            super::counted(report.fallbacks.len(), "fallback", "fallbacks"),
+            super::counted(report.violations.len(), "violation", "violations"),
         );
         for f in &report.fallbacks {
             outln!("  fallback: {f}");

@@ -34,7 +34,7 @@ pub fn report_failure(failed: &Failed, json: bool) -> Exit {
     } else {
         err!("{}", failed.render());
         let n = failed.errors.len();
-        errln!("\n{n} error{} found", if n == 1 { "" } else { "s" });
+        errln!("\n{} found", counted(n, "error", "errors"));
     }
     if failed.is_io() {
         Exit::Failure
@@ -76,13 +76,17 @@ pub fn report_warnings(sources: &SourceMap, warnings: &[Warning], json: bool) {
     }
 }
 
+/// `n` and the noun counted, in the singular where `n` is 1 ("1 file",
+/// "2 files").
+pub fn counted(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
 /// One line that says what a clean compilation holds ("1 file: 1 cell,
 /// 5 products, ...").
 pub fn summary_line(c: &Compiled) -> String {
     let m = &c.model;
     let x = &c.expanded;
-    let counted =
-        |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
     format!(
         "{}: {}, {}, {}, {}, {} ({}), {} in {}",
         counted(c.sources.files().count(), "file", "files"),

@@ -183,7 +183,6 @@ impl<W: World> Learned<'_, W> {
 
     /// The policy's steps from `start` towards `goal`
     /// ([`policy_steps_near`]) with this cell's arm, base and cup.
-    #[allow(clippy::too_many_arguments)]
     fn steps(
         &self,
         more: usize,
