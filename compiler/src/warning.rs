@@ -33,6 +33,36 @@ pub enum Warning {
         /// written too, not only where the jitter may draw them.
         where_written: bool,
     },
+    /// A product the robot places in a slot in an empty cell, but not
+    /// while another product of its inventory stands where it stands (a
+    /// tall product in the upper arm's way to the box: every arm pose at
+    /// the approach point meets it).
+    PlaceBlocked {
+        /// What asked for the placing (an order's assignment, a demo's or
+        /// scenario's moved product, a generator).
+        at: Loc,
+        product: String,
+        /// Where it is picked (its entry's written place).
+        position: [f64; 2],
+        /// Every slot where the same pose meets the same product.
+        slots: Vec<String>,
+        /// The first pose of the placing that the standing products
+        /// block.
+        pose: Pose,
+        /// The product met, with its place and its entry.
+        by: Option<(String, [f64; 2], Loc)>,
+        /// Whether an order or a generator packs the product met.
+        by_packed: bool,
+        /// Whether this product stands in the way of placing the one met
+        /// too (in some slot): then packing either first can stop the
+        /// other.
+        mutual: bool,
+        /// The largest `jitter` of the inventory's blocks (mm).
+        jitter_mm: f64,
+        /// Whether the placing is blocked with the others where they are
+        /// written too, not only where the jitter may draw them.
+        where_written: bool,
+    },
     /// A product the robot picks at its written place, but not in some
     /// of a suite's scenarios, where the jitter draws it and a product
     /// beside it nearer each other than W001 allows for (both move).
@@ -184,6 +214,36 @@ impl fmt::Display for Warning {
                     (false, _) => Ok(()),
                 }
             }
+            Warning::PlaceBlocked {
+                product,
+                position,
+                slots,
+                pose,
+                by,
+                jitter_mm,
+                where_written,
+                ..
+            } => {
+                write!(
+                    f,
+                    "the robot cannot reach {pose} when it puts product `{product}` (picked at ({:.3}, {:.3})) in {} ",
+                    position[0],
+                    position[1],
+                    slot_list(slots)
+                )?;
+                let drawn = *jitter_mm > 0.0 && !where_written;
+                match (by, drawn) {
+                    (Some((other, at, _)), false) => {
+                        write!(f, "while `{other}` stands at ({:.3}, {:.3})", at[0], at[1])
+                    }
+                    (Some((other, at, _)), true) => write!(
+                        f,
+                        "while `{other}` stands up to {jitter_mm:.0} mm from ({:.3}, {:.3})",
+                        at[0], at[1]
+                    ),
+                    (None, _) => f.write_str("while the other products of its inventory stand"),
+                }
+            }
             Warning::DrawnPickBlocked {
                 suite,
                 suite_cases,
@@ -246,11 +306,26 @@ impl fmt::Display for Warning {
     }
 }
 
+/// Slots for people: "slot `a`", "slots `a` and `b`", "slots `a`, `b`
+/// and 3 more".
+fn slot_list(slots: &[String]) -> String {
+    let named: Vec<String> = slots.iter().take(3).map(|s| format!("`{s}`")).collect();
+    match (slots.len(), named.as_slice()) {
+        (0, _) => "its slot".to_owned(),
+        (1, [one]) => format!("slot {one}"),
+        (2, [a, b]) => format!("slots {a} and {b}"),
+        (3, [a, b, c]) => format!("slots {a}, {b} and {c}"),
+        (n, [a, b, c]) => format!("slots {a}, {b}, {c} and {} more", n - 3),
+        _ => format!("{} slots", slots.len()),
+    }
+}
+
 impl Warning {
     /// Stable code, for documentation and tools.
     pub fn code(&self) -> &'static str {
         match self {
             Warning::PickBlocked { .. } => "W001",
+            Warning::PlaceBlocked { .. } => "W007",
             Warning::TooClose { .. } => "W002",
             Warning::DrawnPickBlocked { .. } => "W003",
             Warning::DrawnOutOfReach { .. } => "W006",
@@ -263,6 +338,7 @@ impl Warning {
     pub fn at(&self) -> Loc {
         match self {
             Warning::PickBlocked { at, .. }
+            | Warning::PlaceBlocked { at, .. }
             | Warning::TooClose { at, .. }
             | Warning::DrawnPickBlocked { at, .. }
             | Warning::DrawnOutOfReach { at, .. }
@@ -283,6 +359,14 @@ impl Warning {
             ),
             Warning::PickBlocked { .. } => {
                 "every arm pose that reaches it meets a product beside it".into()
+            }
+            Warning::PlaceBlocked {
+                pose,
+                by: Some((other, ..)),
+                ..
+            } => format!("every arm pose at {pose} meets `{other}`, standing"),
+            Warning::PlaceBlocked { pose, .. } => {
+                format!("every arm pose at {pose} meets a product standing")
             }
             Warning::TooClose { .. } => "placed too close together".into(),
             Warning::DrawnPickBlocked { jitter_mm, .. } => format!(
@@ -306,6 +390,10 @@ impl Warning {
                 by: Some((other, _, at)),
                 ..
             } => vec![(*at, format!("`{other}` stands here"))],
+            Warning::PlaceBlocked {
+                by: Some((other, _, at)),
+                ..
+            } => vec![(*at, format!("`{other}` stands here"))],
             Warning::DrawnPickBlocked { by, by_at, .. } => {
                 vec![(*by_at, format!("`{by}` stands here"))]
             }
@@ -325,6 +413,7 @@ impl Warning {
                 format!("`{product}` stands {height_mm:.0} mm tall on a {side_mm:.0} mm side"),
             )],
             Warning::PickBlocked { .. }
+            | Warning::PlaceBlocked { .. }
             | Warning::TooClose { .. }
             | Warning::NoSequenceRule { .. } => Vec::new(),
         }
@@ -363,6 +452,45 @@ impl Warning {
             ),
             Warning::PickBlocked { product, .. } => format!(
                 "a package packs `{product}` only once the products beside it are gone: pack those first, or give it more room"
+            ),
+            Warning::PlaceBlocked {
+                by,
+                where_written: false,
+                jitter_mm,
+                ..
+            } => {
+                let other = by
+                    .as_ref()
+                    .map_or("the products".to_owned(), |(o, ..)| format!("`{o}`"));
+                format!(
+                    "the placing is free with the products where they are written, and blocked where the jitter draws {other} up to {jitter_mm:.0} mm away: lower the jitter of the inventory's blocks, or move {other} further from the arm's way to the box"
+                )
+            }
+            Warning::PlaceBlocked {
+                product,
+                by: Some((other, ..)),
+                mutual: true,
+                ..
+            } => format!(
+                "`{product}` stands in the way of placing `{other}` too (its own warning), so packing either first can stop the other, with every planner: move one of them (or the box) out of the arm's way to the box"
+            ),
+            Warning::PlaceBlocked {
+                product,
+                by: Some((other, ..)),
+                by_packed: true,
+                ..
+            } => format!(
+                "a package places `{product}` there only once `{other}` is gone, with every planner: put `{other}` before it in the order's sequence, or move `{other}` (or the box) out of the arm's way to the box"
+            ),
+            Warning::PlaceBlocked {
+                by: Some((other, ..)),
+                by_packed: false,
+                ..
+            } => format!(
+                "no order or generator packs `{other}`, so it stands there in every package and every planner fails: move it (or the box) out of the arm's way to the box, or take `{other}` out of the inventory"
+            ),
+            Warning::PlaceBlocked { product, .. } => format!(
+                "a package places `{product}` there only once the products in the arm's way are gone: pack those first, or move them or the box"
             ),
             Warning::DrawnPickBlocked { product, by, .. } => format!(
                 "these scenarios can fail with every planner: move `{product}` and `{by}` further apart, or lower the jitter"

@@ -17,8 +17,9 @@
 //! none of whose branches clears them is an [`Error::StartBlocked`] (every
 //! package would fail at its first motion); a pick the empty cell allows
 //! and the inventory's other products block is a
-//! [`Warning::PickBlocked`], since whether they still stand depends on
-//! the order packed (each of them anywhere the blocks' `jitter` may put
+//! [`Warning::PickBlocked`], and a placing (of a product picked at its
+//! written place) a [`Warning::PlaceBlocked`], since whether they still
+//! stand depends on the order packed (each of them anywhere the blocks' `jitter` may put
 //! it: its footprint widened by the largest).
 
 use crate::error::{Error, Moved, REACH_PROBE};
@@ -217,6 +218,22 @@ pub trait Workspace {
     ) -> Option<Blocked> {
         None
     }
+
+    /// Placing `product`, picked at `at`, into slot `slot` (which the
+    /// empty cell allows) with the `standing` products (not it) where
+    /// they stand: the first placing pose they block, if any. Without an
+    /// answer (the default), nothing is blocked.
+    fn place_among(
+        &self,
+        _m: &Model,
+        _cell: usize,
+        _product: usize,
+        _at: [f64; 2],
+        _slot: usize,
+        _standing: &[Standing],
+    ) -> Option<Blocked> {
+        None
+    }
 }
 
 /// `at` moved `by` (m) along the line from the base axis at `base`: away
@@ -272,12 +289,23 @@ type Dropped = (f64, Option<Lower>, usize, Loc);
 /// A product's place, as bits, so that each question is asked once.
 type Place = (usize, usize, [u64; 2]);
 
+/// A placing the empty cell allows: (inventory, entry, slot, what asked
+/// for it).
+type Reached = (usize, usize, usize, Loc);
+
+/// A placing blocked by standing products: (entry placed, pose, entry
+/// met).
+type Met = (usize, Pose, Option<usize>);
+
 struct Asker<'a> {
     m: &'a Model,
     ws: &'a dyn Workspace,
     /// Picking questions asked, and whether every pose was reached.
     picked: BTreeMap<Place, bool>,
     placed: BTreeSet<(Place, usize)>,
+    /// Placings the empty cell allows of a product picked at its
+    /// entry's written place: (inventory, entry, slot, what asked).
+    reached: Vec<Reached>,
     /// The highest drop per (cell, product, box).
     drops: BTreeMap<(usize, usize, usize), Dropped>,
     errors: Vec<Error>,
@@ -330,7 +358,9 @@ impl Asker<'_> {
     /// start from the lift).
     /// A picking failure is reported at `at_loc` (where the product's
     /// place is written), a placing one at `loc` (what asked for the slot).
-    fn place(&mut self, inv: &Inventory, entry: usize, at: ([f64; 2], Loc), slot: usize, loc: Loc) {
+    fn place(&mut self, i: usize, entry: usize, at: ([f64; 2], Loc), slot: usize, loc: Loc) {
+        let m = self.m;
+        let inv = &m.inventories[i];
         let (at, at_loc) = at;
         if !self.pick(inv, entry, at, at_loc) {
             return;
@@ -340,7 +370,11 @@ impl Asker<'_> {
         if !self.placed.insert((place, slot)) {
             return;
         }
-        match self.ws.place(self.m, inv.cell, product, at, slot) {
+        let placed = self.ws.place(self.m, inv.cell, product, at, slot);
+        if placed.is_ok() && at == inv.entries[entry].at {
+            self.reached.push((i, entry, slot, loc));
+        }
+        match placed {
             Err(u) => self.errors.push(Error::Unreachable {
                 at: loc,
                 task: Task::Place {
@@ -399,7 +433,8 @@ impl Asker<'_> {
             .collect()
     }
 
-    fn moved(&mut self, inv: &Inventory, order: usize, placed: &[Placed]) {
+    fn moved(&mut self, order: usize, placed: &[Placed]) {
+        let i = self.m.orders[order].inventory;
         for p in placed {
             let slot = self.m.orders[order]
                 .assignment
@@ -407,16 +442,17 @@ impl Asker<'_> {
                 .find(|a| a.entry == p.entry)
                 .map(|a| a.slot);
             if let Some(slot) = slot {
-                self.place(inv, p.entry, (p.at, p.loc), slot, p.loc);
+                self.place(i, p.entry, (p.at, p.loc), slot, p.loc);
             }
         }
     }
 
-    fn choose(&mut self, inv: &Inventory, c: &Choose) {
+    fn choose(&mut self, i: usize, c: &Choose) {
+        let m = self.m;
         for &e in &c.entries {
             for &s in &c.slots {
-                let entry = &inv.entries[e];
-                self.place(inv, e, (entry.at, entry.loc), s, c.loc);
+                let entry = &m.inventories[i].entries[e];
+                self.place(i, e, (entry.at, entry.loc), s, c.loc);
             }
         }
     }
@@ -432,6 +468,7 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> (Vec<Error>, Vec<Warning>) {
         ws,
         picked: BTreeMap::new(),
         placed: BTreeSet::new(),
+        reached: Vec::new(),
         drops: BTreeMap::new(),
         errors: Vec::new(),
     };
@@ -463,22 +500,26 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> (Vec<Error>, Vec<Warning>) {
         let inv = &m.inventories[order.inventory];
         for asg in &order.assignment {
             let entry = &inv.entries[asg.entry];
-            a.place(inv, asg.entry, (entry.at, entry.loc), asg.slot, asg.loc);
+            a.place(
+                order.inventory,
+                asg.entry,
+                (entry.at, entry.loc),
+                asg.slot,
+                asg.loc,
+            );
         }
     }
     for demo in &m.demos {
-        let inv = &m.inventories[m.orders[demo.order].inventory];
-        a.moved(inv, demo.order, &demo.at);
+        a.moved(demo.order, &demo.at);
     }
     for sc in &m.scenarios {
-        let inv = &m.inventories[m.orders[sc.order].inventory];
-        a.moved(inv, sc.order, &sc.at);
+        a.moved(sc.order, &sc.at);
     }
     for d in &m.demo_sets {
-        a.choose(&m.inventories[d.inventory], &d.choose);
+        a.choose(d.inventory, &d.choose);
     }
     for s in &m.scenario_sets {
-        a.choose(&m.inventories[s.inventory], &s.choose);
+        a.choose(s.inventory, &s.choose);
     }
     let mut warnings = a.dropped_high();
     for i in 0..m.inventories.len() {
@@ -492,8 +533,117 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> (Vec<Error>, Vec<Warning>) {
             &mut a.errors,
             &mut warnings,
         );
+        place_standing(m, ws, i, &a.reached, &a.picked, &mut warnings);
     }
     (a.errors, warnings)
+}
+
+/// Inventory `i`'s products standing at their entries when a package
+/// starts; the same, each anywhere the blocks that generate from the
+/// inventory may draw it (its footprint widened by their largest
+/// `jitter`); and that jitter (m, each axis).
+fn standing_in(m: &Model, i: usize) -> (Vec<Standing>, Vec<Standing>, f64) {
+    let at_start: Vec<Standing> = m.inventories[i]
+        .entries
+        .iter()
+        .map(|e| Standing {
+            product: e.product,
+            at: e.at,
+            margin: 0.0,
+        })
+        .collect();
+    let jitter = m
+        .demo_sets
+        .iter()
+        .filter(|d| d.inventory == i)
+        .map(|d| d.jitter)
+        .chain(
+            m.scenario_sets
+                .iter()
+                .filter(|s| s.inventory == i)
+                .map(|s| s.jitter),
+        )
+        .fold(0.0, f64::max);
+    let all = at_start
+        .iter()
+        .map(|s| Standing {
+            margin: jitter,
+            ..*s
+        })
+        .collect();
+    (at_start, all, jitter)
+}
+
+/// The placings `reached` (in the empty cell) of inventory `i`'s
+/// products that its other products, standing at their entries, block:
+/// one [`Warning::PlaceBlocked`] per product, pose and product met, with
+/// every slot where they meet so (the carry to a box past a tall product
+/// standing by the arm's base blocks most slots alike).
+fn place_standing(
+    m: &Model,
+    ws: &dyn Workspace,
+    i: usize,
+    reached: &[Reached],
+    picked: &BTreeMap<Place, bool>,
+    warnings: &mut Vec<Warning>,
+) {
+    let inv = &m.inventories[i];
+    let (_, all, jitter) = standing_in(m, i);
+    let others = |k: usize, margin: f64| -> (Vec<Standing>, Vec<usize>) {
+        all.iter()
+            .enumerate()
+            .filter(|&(j, _)| j != k)
+            .map(|(j, s)| (Standing { margin, ..*s }, j))
+            .unzip()
+    };
+    // What first asked, and the slots, per (entry, pose, entry met).
+    let mut blocked: BTreeMap<Met, (Loc, Vec<usize>)> = BTreeMap::new();
+    for &(_, k, slot, loc) in reached.iter().filter(|r| r.0 == i) {
+        let Some(e) = inv.entries.get(k) else {
+            continue;
+        };
+        let (standing, index) = others(k, jitter);
+        if let Some(b) = ws.place_among(m, inv.cell, e.product, e.at, slot, &standing) {
+            let by = b.by.and_then(|b| index.get(b).copied());
+            let (_, slots) = blocked.entry((k, b.pose, by)).or_insert((loc, Vec::new()));
+            if !slots.contains(&slot) {
+                slots.push(slot);
+            }
+        }
+    }
+    let name = |j: usize| m.products[inv.entries[j].product].name.clone();
+    let cell = &m.cells[inv.cell];
+    // Pairs each standing in the way of the other's placing.
+    let meets: BTreeSet<(usize, usize)> = blocked
+        .keys()
+        .filter_map(|&(k, _, by)| Some((k, by?)))
+        .collect();
+    for ((k, pose, by), (at, slots)) in blocked {
+        let e = &inv.entries[k];
+        let where_written = jitter <= 0.0 || {
+            let (written, _) = others(k, 0.0);
+            ws.place_among(m, inv.cell, e.product, e.at, slots[0], &written)
+                .is_some()
+        };
+        let met = by.map(|j| (j, &inv.entries[j]));
+        warnings.push(Warning::PlaceBlocked {
+            at,
+            product: name(k),
+            position: e.at,
+            slots: slots
+                .iter()
+                .filter_map(|&s| cell.slots.get(s).map(|s| s.name.clone()))
+                .collect(),
+            pose,
+            by: met.map(|(j, other)| (name(j), other.at, other.loc)),
+            by_packed: met.is_some_and(|(_, o)| {
+                picked.get(&(inv.cell, o.product, o.at.map(f64::to_bits))) == Some(&true)
+            }),
+            mutual: by.is_some_and(|j| meets.contains(&(j, k))),
+            jitter_mm: jitter * 1000.0,
+            where_written,
+        });
+    }
 }
 
 /// What inventory `i`'s products, standing at their entries, block: its
@@ -509,36 +659,7 @@ fn standing(
     warnings: &mut Vec<Warning>,
 ) {
     let inv = &m.inventories[i];
-    let at_start: Vec<Standing> = inv
-        .entries
-        .iter()
-        .map(|e| Standing {
-            product: e.product,
-            at: e.at,
-            margin: 0.0,
-        })
-        .collect();
-    // The most any block that generates from this inventory moves a
-    // product (each axis).
-    let jitter = m
-        .demo_sets
-        .iter()
-        .filter(|d| d.inventory == i)
-        .map(|d| d.jitter)
-        .chain(
-            m.scenario_sets
-                .iter()
-                .filter(|s| s.inventory == i)
-                .map(|s| s.jitter),
-        )
-        .fold(0.0, f64::max);
-    let all: Vec<Standing> = at_start
-        .iter()
-        .map(|s| Standing {
-            margin: jitter,
-            ..*s
-        })
-        .collect();
+    let (at_start, all, jitter) = standing_in(m, i);
     let name = |j: usize| m.products[inv.entries[j].product].name.clone();
     if started
         && let Some(j) = ws

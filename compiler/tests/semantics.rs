@@ -653,6 +653,150 @@ impl packwright_compiler::Workspace for Deep {
     }
 }
 
+/// A workspace where `B`, standing, blocks the approach of `A` to slots
+/// `g1` and `g2`, and `A`, standing, that of `B` to `g2`; everything else
+/// is free. Records the placings asked about.
+struct InTheWay {
+    asked: std::cell::RefCell<Vec<(String, String)>>,
+}
+
+impl packwright_compiler::Workspace for InTheWay {
+    fn start(&self, _: &Model, _: usize) -> Option<Unreached> {
+        None
+    }
+    fn pick(&self, _: &Model, _: usize, _: usize, _: [f64; 2]) -> Option<Unreached> {
+        None
+    }
+    fn place(
+        &self,
+        _: &Model,
+        _: usize,
+        _: usize,
+        _: [f64; 2],
+        _: usize,
+    ) -> Result<Released, Unreached> {
+        Ok(Released::default())
+    }
+    fn place_among(
+        &self,
+        m: &Model,
+        _: usize,
+        product: usize,
+        _: [f64; 2],
+        slot: usize,
+        standing: &[Standing],
+    ) -> Option<Blocked> {
+        let name = m.products[product].name.as_str();
+        let slot = m.cells[0].slots[slot].name.as_str();
+        self.asked
+            .borrow_mut()
+            .push((name.to_owned(), slot.to_owned()));
+        let met = match (name, slot) {
+            ("A", "g1" | "g2") => "B",
+            ("B", "g2") => "A",
+            _ => return None,
+        };
+        let by = standing
+            .iter()
+            .position(|s| m.products[s.product].name == met)?;
+        Some(Blocked {
+            pose: Pose::Approach,
+            by: Some(by),
+        })
+    }
+}
+
+/// W007: a placing the empty cell allows that a product standing blocks
+/// is a warning at what asked for it, naming the product met and every
+/// slot blocked alike (one warning per product, pose and product met);
+/// two products each in the other's way say so, since packing either
+/// first can stop the other. Only placings something asks for are asked
+/// about, each among the others of its inventory.
+#[test]
+fn a_placing_a_standing_product_blocks_is_a_warning_naming_its_slots() {
+    let loader = MemoryLoader::new().with(
+        "main.pack",
+        format!(
+            "{CELL}\norder o for stock5 {{\n A -> g1\n C -> g3\n}}\n\
+             scenarios s for stock5 {{\n choose 2 of A, B into g1, g2\n count 4\n}}\n"
+        ),
+    );
+    let ws = InTheWay {
+        asked: Default::default(),
+    };
+    let c = match check(&loader, &[PathBuf::from("main.pack")], &ws) {
+        Ok(c) => c,
+        Err(f) => panic!("{:#?}", f.errors),
+    };
+    let mut asked = ws.asked.into_inner();
+    asked.sort();
+    asked.dedup();
+    let asked: Vec<(&str, &str)> = asked
+        .iter()
+        .map(|(p, s)| (p.as_str(), s.as_str()))
+        .collect();
+    assert_eq!(
+        asked,
+        [
+            ("A", "g1"),
+            ("A", "g2"),
+            ("B", "g1"),
+            ("B", "g2"),
+            ("C", "g3")
+        ]
+    );
+    let blocked: Vec<_> = c
+        .warnings
+        .iter()
+        .filter_map(|w| match w {
+            Warning::PlaceBlocked {
+                product,
+                slots,
+                pose: Pose::Approach,
+                by,
+                by_packed,
+                mutual,
+                ..
+            } => Some((
+                product.as_str(),
+                slots.as_slice(),
+                by.as_ref().map(|b| b.0.as_str()),
+                *by_packed,
+                *mutual,
+            )),
+            _ => None,
+        })
+        .collect();
+    let (g1_g2, g2) = (["g1".to_owned(), "g2".to_owned()], ["g2".to_owned()]);
+    assert_eq!(
+        blocked,
+        [
+            ("A", &g1_g2[..], Some("B"), true, true),
+            ("B", &g2[..], Some("A"), true, true)
+        ],
+        "{:#?}",
+        c.warnings
+    );
+    assert!(c.warnings.iter().all(|w| w.code() == "W007"));
+    // At what asked first: the order's assignment `A -> g1`.
+    let a = c.warnings[0].at();
+    let text = format!("{CELL}\n");
+    assert_eq!(
+        a.span.start as usize,
+        text.len() + "order o for stock5 {\n ".len()
+    );
+    let message = c.warnings[0].to_string();
+    assert!(
+        message.contains("puts product `A` (picked at (0.500, -0.200)) in slots `g1` and `g2` while `B` stands at (0.620, -0.200)"),
+        "{message}"
+    );
+    assert!(
+        c.warnings[0]
+            .help()
+            .contains("packing either first can stop the other")
+    );
+}
+
 /// W004: a product over twice as tall as its narrow side, dropped more
 /// than twice that side, is warned about once per box, at its highest
 /// drop, with the cup that would let it down; a cube dropped as far, or

@@ -187,6 +187,31 @@ impl Workspace for RobotWorkspace {
         })
         .flatten()
     }
+
+    fn place_among(
+        &self,
+        m: &Model,
+        cell: usize,
+        product: usize,
+        at: [f64; 2],
+        slot: usize,
+        standing: &[Standing],
+    ) -> Option<Blocked> {
+        let size = m.products.get(product)?.size;
+        let among = bodies(m, standing);
+        self.ask(m, cell, |r| {
+            let r = r.among(&among);
+            let u = r.placing(size, at, slot).err()?;
+            let by = r
+                .blocked_by(u.tip)
+                .and_then(|name| index_of(m, standing, &name));
+            Some(Blocked {
+                pose: pose(u).pose,
+                by,
+            })
+        })
+        .flatten()
+    }
 }
 
 #[cfg(test)]
