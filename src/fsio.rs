@@ -60,6 +60,15 @@ impl Loader for FsLoader {
     fn identity(&self, path: &Path) -> Option<PathBuf> {
         fs::canonicalize(path).ok()
     }
+
+    fn read_named(&self, path: &Path) -> Result<String, Unreadable> {
+        match fs::metadata(path) {
+            Ok(m) if !m.is_file() && !m.is_dir() => Err(Unreadable::Other(
+                "not a file on disk (a named pipe, a socket or a device): a file another one names must be a regular file".to_owned(),
+            )),
+            _ => read_source(path),
+        }
+    }
 }
 
 /// The temporary siblings this process is writing: removed when the run

@@ -48,6 +48,41 @@ fn oversized_and_endless_sources_are_refused_quickly() {
     }
 }
 
+/// A file that `use`s a named pipe nobody writes to is refused at once
+/// (opening the pipe would wait for a writer for ever), with the `use`'s
+/// place (E010) and exit 1, as any error in the sources.
+#[test]
+fn a_used_named_pipe_is_refused_not_waited_on() {
+    let dir = scratch("reliability", "fifo");
+    let fifo = dir.join("fifo.pack");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo runs (coreutils)");
+    assert!(made.success(), "mkfifo {}", fifo.display());
+    let user = dir.join("user.pack");
+    fs::write(&user, "use \"fifo.pack\"\n").expect("written");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_packwright"))
+        .args(["check", &user.display().to_string()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("started");
+    let started = Instant::now();
+    while child.try_wait().expect("waited").is_none() {
+        if started.elapsed() > Duration::from_secs(20) {
+            let _ = child.kill();
+            panic!("check waited on the named pipe");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().expect("output");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("not a file on disk"), "{stderr}");
+    assert!(stderr.contains("user.pack:1:"), "{stderr}");
+}
+
 #[test]
 fn a_killed_runs_temporary_directories_are_removed_by_the_next_run() {
     if !Path::new("/proc/self").exists() {

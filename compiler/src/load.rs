@@ -56,7 +56,11 @@ fn visit(
         }
         return;
     }
-    let text = match loader.read(&path) {
+    let read = match used_at {
+        Some(_) => loader.read_named(&path),
+        None => loader.read(&path),
+    };
+    let text = match read {
         Ok(text) => text,
         Err(reason) => {
             state.errors.push(match used_at {

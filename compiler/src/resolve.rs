@@ -489,7 +489,7 @@ impl Resolver<'_> {
                         .map(Path::to_path_buf)
                         .unwrap_or_default();
                     let full = normalize(&dir.join(&path.value));
-                    if let Err(reason) = self.loader.read(&full) {
+                    if let Err(reason) = self.loader.read_named(&full) {
                         self.errors.push(Error::RobotFileMissing {
                             at: Loc::new(f, path.span),
                             path: full.display().to_string(),

@@ -18,6 +18,14 @@ pub trait Loader {
     fn identity(&self, _path: &Path) -> Option<PathBuf> {
         None
     }
+
+    /// Reads a file another one names (a `use`, a `robot urdf`): as
+    /// [`Loader::read`], but a loader on real files refuses what is not
+    /// a file on disk (a named pipe nobody writes to would be waited on
+    /// for ever). Files named on the command line may be pipes (`<(...)`).
+    fn read_named(&self, path: &Path) -> Result<String, Unreadable> {
+        self.read(path)
+    }
 }
 
 /// Why a source file could not be read.
