@@ -1088,8 +1088,10 @@ mod tests {
 
     /// The checker as it was before its fast path (issue 11): every part's
     /// pose and box computed apart, every obstacle tested against every
-    /// part, every pair's adjacency looked up, parry's GJK for every
-    /// narrow test. [`Checker::check`] must give its answers.
+    /// part, every pair's adjacency looked up, the reference narrow test
+    /// for every pair (`body::exact_intersects`: a capsule and a cuboid in
+    /// closed form, anything else by parry's GJK). [`Checker::check`] must
+    /// give its answers.
     fn reference_check(
         c: &Checker,
         allowed: &[(usize, usize)],
