@@ -711,6 +711,20 @@ fn the_scenario_w003_names_fails_with_every_planner_and_leaves_the_rest_unmeasur
     }
 }
 
+/// Helper T's cell 6311 (tests/cells/turned_tray.pack): a 2 x 8 tray
+/// turned 60 degrees behind the waiting products. The first carry meets
+/// the tray in the arm's taught shape, the arm changes to the other one
+/// on the way and stays in it; above two slots of c1_n9/01 the bundled
+/// policy's steps turned the shoulder past -2 pi there (two fallbacks).
+/// The taught shape's steps are now brought back to the arm's own shape
+/// (`in_own_shape`): none.
+#[test]
+fn steps_in_a_shape_the_policy_was_not_taught_are_the_taught_shapes_brought_back() {
+    let report = executes_file("tests/cells/turned_tray.pack", "c1_n9/01");
+    assert_eq!(report["complete"], true, "{report}");
+    assert_eq!(report["fallbacks"], serde_json::json!([]), "{report}");
+}
+
 /// A box right behind the robot's base (tests/cells/rear_box.pack): each
 /// product needs about half a turn of the base, and the policy's steps
 /// commit to either way round. In rear_3of5/03 they turned clockwise to

@@ -492,6 +492,57 @@ impl<W: World> Learned<'_, W> {
         })
     }
 
+    /// The policy's steps from an arm on another inverse-kinematics branch
+    /// than it was taught on, taken on the taught branch (its joints for
+    /// `start`'s flange pose) and each brought back to `start`'s own
+    /// branch through inverse kinematics: the cup follows the policy's
+    /// path, the arm keeps its shape. An arm that changed its shape on the
+    /// way to a box (the upper arm over its rim in the taught shape) stays
+    /// in the other one for every later pick and place, where the policy's
+    /// own steps can turn the shoulder past its limit (helper T's cell
+    /// 6311 with the bundled model: 23 fallbacks in 32 packages). The
+    /// end joined straight, else through the steps brought back. `None`
+    /// on a non-UR arm, on the taught branch, where a step has no
+    /// solution on `start`'s branch within the limits, or where no way is
+    /// free.
+    fn in_own_shape(
+        &self,
+        start: Joints,
+        goal: [f64; 3],
+        tolerance: f64,
+        load: Load,
+    ) -> Option<Route> {
+        let s = &self.station;
+        let (arm, base) = (s.arm, &s.base);
+        let own = arm.ur_branch(base, &start)?;
+        let taught = arm.ur_branch(base, &arm.from_ur_convention(&READY))?;
+        if own == taught {
+            return None;
+        }
+        let from = (*arm
+            .ur_ik_branches(base, &arm.flange_pose(base, &start), &start)
+            .get(taught)?)?;
+        let act = &mut |q: &Joints, delta: [f64; 3]| self.act(q, delta);
+        let steps = self
+            .steps(MORE_STEPS, Hold::Nothing, from, goal, tolerance, act)
+            .ok()?;
+        let mut near = start;
+        let mut back = Vec::with_capacity(steps.len());
+        for q in &steps {
+            let flange = arm.flange_pose(base, q);
+            near = (*arm.ur_ik_branches(base, &flange, &near).get(own)?)?;
+            back.push(near);
+        }
+        let end = *back.last()?;
+        checked_samples(arm, &s.checker, start, &[end], load)
+            .ok()
+            .map(|samples| Route {
+                waypoints: vec![end],
+                samples,
+            })
+            .or_else(|| s.through(0, start, back, load))
+    }
+
     /// The approach from `from` planned again in another arm shape
     /// ([`Learned::reshaped_then`]), from whose end the policy's motion
     /// reaches `above` (above the slot) free: both routes.
@@ -802,6 +853,14 @@ impl<W: World> Learned<'_, W> {
                 if k == 0
                     && rolled.is_err()
                     && let Some(route) = self.reshaped(start, goal, tolerance, load, Shapes::Taught)
+                {
+                    rolled = Ok(route);
+                }
+                // An arm on another shape than the policy was taught in,
+                // whose steps fail: the taught shape's steps, in its own.
+                if rolled.is_err()
+                    && !self.station.late()
+                    && let Some(route) = self.in_own_shape(start, goal, tolerance, load)
                 {
                     rolled = Ok(route);
                 }
