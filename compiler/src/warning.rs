@@ -189,14 +189,7 @@ impl fmt::Display for Warning {
                 )?;
                 let drawn = *jitter_mm > 0.0 && !where_written;
                 match (by, drawn) {
-                    (Some((other, at, _)), false) => {
-                        write!(f, "while `{other}` stands at ({:.3}, {:.3})", at[0], at[1])
-                    }
-                    (Some((other, at, _)), true) => write!(
-                        f,
-                        "while `{other}` stands up to {jitter_mm:.0} mm from ({:.3}, {:.3})",
-                        at[0], at[1]
-                    ),
+                    (Some(met), _) => write_met(f, met, *jitter_mm, drawn),
                     (None, false) => f.write_str("while the other products of its inventory stand"),
                     (None, true) => write!(
                         f,
@@ -232,16 +225,9 @@ impl fmt::Display for Warning {
                     slot_list(slots)
                 )?;
                 let drawn = *jitter_mm > 0.0 && !where_written;
-                match (by, drawn) {
-                    (Some((other, at, _)), false) => {
-                        write!(f, "while `{other}` stands at ({:.3}, {:.3})", at[0], at[1])
-                    }
-                    (Some((other, at, _)), true) => write!(
-                        f,
-                        "while `{other}` stands up to {jitter_mm:.0} mm from ({:.3}, {:.3})",
-                        at[0], at[1]
-                    ),
-                    (None, _) => f.write_str("while the other products of its inventory stand"),
+                match by {
+                    Some(met) => write_met(f, met, *jitter_mm, drawn),
+                    None => f.write_str("while the other products of its inventory stand"),
                 }
             }
             Warning::DrawnPickBlocked {
@@ -304,6 +290,26 @@ impl fmt::Display for Warning {
             ),
         }
     }
+}
+
+/// "while `other` stands at (x, y)", or "up to J mm from" there where
+/// only the jitter's draws meet it (`drawn`).
+fn write_met(
+    f: &mut fmt::Formatter<'_>,
+    (other, at, _): &(String, [f64; 2], Loc),
+    jitter_mm: f64,
+    drawn: bool,
+) -> fmt::Result {
+    let within = if drawn {
+        format!("up to {jitter_mm:.0} mm from")
+    } else {
+        "at".to_owned()
+    };
+    write!(
+        f,
+        "while `{other}` stands {within} ({:.3}, {:.3})",
+        at[0], at[1]
+    )
 }
 
 /// Slots for people: "slot `a`", "slots `a` and `b`", "slots `a`, `b`

@@ -56,6 +56,30 @@ impl RobotWorkspace {
     fn ask<T>(&self, m: &Model, cell: usize, f: impl FnOnce(&Reachability) -> T) -> Option<T> {
         self.with(m, cell, |built| built.as_ref().ok().map(f))
     }
+
+    /// The first pose `unreached` finds out of reach with the `standing`
+    /// products where they stand, and the one its nearest arm pose meets.
+    fn blocked_among(
+        &self,
+        m: &Model,
+        cell: usize,
+        standing: &[Standing],
+        unreached: impl FnOnce(&Reachability) -> Option<execute::Unreached>,
+    ) -> Option<Blocked> {
+        let among = bodies(m, standing);
+        self.ask(m, cell, |r| {
+            let r = r.among(&among);
+            let u = unreached(&r)?;
+            let by = r
+                .blocked_by(u.tip)
+                .and_then(|name| index_of(m, standing, &name));
+            Some(Blocked {
+                pose: pose(u).pose,
+                by,
+            })
+        })
+        .flatten()
+    }
 }
 
 /// The standing products as the checker's bodies, named as the model
@@ -173,19 +197,7 @@ impl Workspace for RobotWorkspace {
         standing: &[Standing],
     ) -> Option<Blocked> {
         let size = m.products.get(product)?.size;
-        let among = bodies(m, standing);
-        self.ask(m, cell, |r| {
-            let r = r.among(&among);
-            let u = r.picking(size, at).err()?;
-            let by = r
-                .blocked_by(u.tip)
-                .and_then(|name| index_of(m, standing, &name));
-            Some(Blocked {
-                pose: pose(u).pose,
-                by,
-            })
-        })
-        .flatten()
+        self.blocked_among(m, cell, standing, |r| r.picking(size, at).err())
     }
 
     fn place_among(
@@ -198,19 +210,7 @@ impl Workspace for RobotWorkspace {
         standing: &[Standing],
     ) -> Option<Blocked> {
         let size = m.products.get(product)?.size;
-        let among = bodies(m, standing);
-        self.ask(m, cell, |r| {
-            let r = r.among(&among);
-            let u = r.placing(size, at, slot).err()?;
-            let by = r
-                .blocked_by(u.tip)
-                .and_then(|name| index_of(m, standing, &name));
-            Some(Blocked {
-                pose: pose(u).pose,
-                by,
-            })
-        })
-        .flatten()
+        self.blocked_among(m, cell, standing, |r| r.placing(size, at, slot).err())
     }
 }
 
