@@ -23,7 +23,7 @@
 //! it: its footprint widened by the largest).
 
 use crate::error::{Error, Moved, REACH_PROBE};
-use crate::model::{Choose, Inventory, Model, Placed, RobotModel};
+use crate::model::{Choose, Entry, Inventory, Model, Placed, RobotModel};
 use crate::source::Loc;
 use crate::warning::Warning;
 use serde::Serialize;
@@ -524,25 +524,55 @@ pub fn check(m: &Model, ws: &dyn Workspace) -> (Vec<Error>, Vec<Warning>) {
     let mut warnings = a.dropped_high();
     for i in 0..m.inventories.len() {
         let cell = m.inventories[i].cell;
+        let stand = standing_in(m, i);
         standing(
             m,
             ws,
-            i,
+            &stand,
             started.contains(&cell),
             &a.picked,
             &mut a.errors,
             &mut warnings,
         );
-        place_standing(m, ws, i, &a.reached, &a.picked, &mut warnings);
+        place_standing(m, ws, &stand, &a.reached, &a.picked, &mut warnings);
     }
     (a.errors, warnings)
 }
 
-/// Inventory `i`'s products standing at their entries when a package
-/// starts; the same, each anywhere the blocks that generate from the
-/// inventory may draw it (its footprint widened by their largest
-/// `jitter`); and that jitter (m, each axis).
-fn standing_in(m: &Model, i: usize) -> (Vec<Standing>, Vec<Standing>, f64) {
+/// An inventory's products as they stand when a package starts.
+struct Stand {
+    /// The inventory (an index into `Model::inventories`).
+    i: usize,
+    /// Each at its entry.
+    at_start: Vec<Standing>,
+    /// Each anywhere the blocks that generate from the inventory may draw
+    /// it (its footprint widened by their largest `jitter`).
+    all: Vec<Standing>,
+    /// That jitter (m, each axis).
+    jitter: f64,
+}
+
+impl Stand {
+    /// The products other than entry `k`, each widened by `margin`, and
+    /// their entries' indices.
+    fn others(&self, k: usize, margin: f64) -> (Vec<Standing>, Vec<usize>) {
+        self.all
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != k)
+            .map(|(j, s)| (Standing { margin, ..*s }, j))
+            .unzip()
+    }
+}
+
+/// Whether `entry`'s pick in cell `cell` was asked and every pose of it
+/// reached.
+fn pick_reached(picked: &BTreeMap<Place, bool>, cell: usize, entry: &Entry) -> bool {
+    picked.get(&(cell, entry.product, entry.at.map(f64::to_bits))) == Some(&true)
+}
+
+/// Inventory `i`'s products standing when a package starts ([`Stand`]).
+fn standing_in(m: &Model, i: usize) -> Stand {
     let at_start: Vec<Standing> = m.inventories[i]
         .entries
         .iter()
@@ -571,7 +601,12 @@ fn standing_in(m: &Model, i: usize) -> (Vec<Standing>, Vec<Standing>, f64) {
             ..*s
         })
         .collect();
-    (at_start, all, jitter)
+    Stand {
+        i,
+        at_start,
+        all,
+        jitter,
+    }
 }
 
 /// The placings `reached` (in the empty cell) of inventory `i`'s
@@ -582,27 +617,20 @@ fn standing_in(m: &Model, i: usize) -> (Vec<Standing>, Vec<Standing>, f64) {
 fn place_standing(
     m: &Model,
     ws: &dyn Workspace,
-    i: usize,
+    stand: &Stand,
     reached: &[Reached],
     picked: &BTreeMap<Place, bool>,
     warnings: &mut Vec<Warning>,
 ) {
+    let (i, jitter) = (stand.i, stand.jitter);
     let inv = &m.inventories[i];
-    let (_, all, jitter) = standing_in(m, i);
-    let others = |k: usize, margin: f64| -> (Vec<Standing>, Vec<usize>) {
-        all.iter()
-            .enumerate()
-            .filter(|&(j, _)| j != k)
-            .map(|(j, s)| (Standing { margin, ..*s }, j))
-            .unzip()
-    };
     // What first asked, and the slots, per (entry, pose, entry met).
     let mut blocked: BTreeMap<Met, (Loc, Vec<usize>)> = BTreeMap::new();
     for &(_, k, slot, loc) in reached.iter().filter(|r| r.0 == i) {
         let Some(e) = inv.entries.get(k) else {
             continue;
         };
-        let (standing, index) = others(k, jitter);
+        let (standing, index) = stand.others(k, jitter);
         if let Some(b) = ws.place_among(m, inv.cell, e.product, e.at, slot, &standing) {
             let by = b.by.and_then(|b| index.get(b).copied());
             let (_, slots) = blocked.entry((k, b.pose, by)).or_insert((loc, Vec::new()));
@@ -621,7 +649,7 @@ fn place_standing(
     for ((k, pose, by), (at, slots)) in blocked {
         let e = &inv.entries[k];
         let where_written = jitter <= 0.0 || {
-            let (written, _) = others(k, 0.0);
+            let (written, _) = stand.others(k, 0.0);
             ws.place_among(m, inv.cell, e.product, e.at, slots[0], &written)
                 .is_some()
         };
@@ -636,9 +664,7 @@ fn place_standing(
                 .collect(),
             pose,
             by: met.map(|(j, other)| (name(j), other.at, other.loc)),
-            by_packed: met.is_some_and(|(_, o)| {
-                picked.get(&(inv.cell, o.product, o.at.map(f64::to_bits))) == Some(&true)
-            }),
+            by_packed: met.is_some_and(|(_, o)| pick_reached(picked, inv.cell, o)),
             mutual: by.is_some_and(|j| meets.contains(&(j, k))),
             jitter_mm: jitter * 1000.0,
             where_written,
@@ -652,18 +678,18 @@ fn place_standing(
 fn standing(
     m: &Model,
     ws: &dyn Workspace,
-    i: usize,
+    stand: &Stand,
     started: bool,
     picked: &BTreeMap<Place, bool>,
     errors: &mut Vec<Error>,
     warnings: &mut Vec<Warning>,
 ) {
-    let inv = &m.inventories[i];
-    let (at_start, all, jitter) = standing_in(m, i);
+    let (at_start, jitter) = (&stand.at_start, stand.jitter);
+    let inv = &m.inventories[stand.i];
     let name = |j: usize| m.products[inv.entries[j].product].name.clone();
     if started
         && let Some(j) = ws
-            .start_among(m, inv.cell, &at_start)
+            .start_among(m, inv.cell, at_start)
             .filter(|&j| j < at_start.len())
     {
         errors.push(Error::StartBlocked {
@@ -674,31 +700,21 @@ fn standing(
         });
     }
     for (k, e) in inv.entries.iter().enumerate() {
-        if picked.get(&(inv.cell, e.product, e.at.map(f64::to_bits))) != Some(&true) {
+        if !pick_reached(picked, inv.cell, e) {
             continue;
         }
         // The others, with their entries' indices.
-        let (others, index): (Vec<Standing>, Vec<usize>) = all
-            .iter()
-            .enumerate()
-            .filter(|&(j, _)| j != k)
-            .map(|(j, s)| (*s, j))
-            .unzip();
+        let (others, index) = stand.others(k, jitter);
         if let Some(b) = ws.pick_among(m, inv.cell, e.product, e.at, &others) {
             let met =
                 b.by.and_then(|b| index.get(b))
                     .map(|&j| (j, &inv.entries[j]));
             let by = met.map(|(j, other)| (name(j), other.at, other.loc));
-            let by_packed = met.is_some_and(|(_, o)| {
-                picked.get(&(inv.cell, o.product, o.at.map(f64::to_bits))) == Some(&true)
-            });
+            let by_packed = met.is_some_and(|(_, o)| pick_reached(picked, inv.cell, o));
             // Blocked with the others where they are written too, or only
             // where the jitter may draw them (asked again without it).
             let where_written = jitter <= 0.0 || {
-                let written: Vec<Standing> = others
-                    .iter()
-                    .map(|s| Standing { margin: 0.0, ..*s })
-                    .collect();
+                let (written, _) = stand.others(k, 0.0);
                 ws.pick_among(m, inv.cell, e.product, e.at, &written)
                     .is_some()
             };

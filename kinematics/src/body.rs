@@ -283,7 +283,7 @@ pub fn intersects(p1: &Pose, s1: &dyn ParryShape, p2: &Pose, s2: &dyn ParryShape
     if let Some(answer) = capsule_and_cuboid(p1, s1, p2, s2) {
         return answer;
     }
-    !cylinder_apart(p1, s1, p2, s2) && exact_intersects(p1, s1, p2, s2)
+    !cylinder_apart(p1, s1, p2, s2) && parry_intersects(p1, s1, p2, s2)
 }
 
 /// Whether a capsule meets a cuboid: the squared distance from its
@@ -408,9 +408,12 @@ fn cylinder_apart(p1: &Pose, s1: &dyn ParryShape, p2: &Pose, s2: &dyn ParryShape
 /// unsupported pair cannot happen with capsules and cuboids; it counts as
 /// a collision, to stay on the safe side.
 pub fn exact_intersects(p1: &Pose, s1: &dyn ParryShape, p2: &Pose, s2: &dyn ParryShape) -> bool {
-    capsule_and_cuboid(p1, s1, p2, s2).unwrap_or_else(|| {
-        query::intersection_test(p1, s1, p2, s2).map_or(true, |i| i.intersecting)
-    })
+    capsule_and_cuboid(p1, s1, p2, s2).unwrap_or_else(|| parry_intersects(p1, s1, p2, s2))
+}
+
+/// Parry's answer (GJK); an unsupported pair counts as a collision.
+fn parry_intersects(p1: &Pose, s1: &dyn ParryShape, p2: &Pose, s2: &dyn ParryShape) -> bool {
+    query::intersection_test(p1, s1, p2, s2).map_or(true, |i| i.intersecting)
 }
 
 /// A capsule and a cuboid's answer, in either order ([`capsule_meets_cuboid`]);

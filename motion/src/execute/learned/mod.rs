@@ -391,7 +391,7 @@ impl<W: World> Learned<'_, W> {
         let branches = arm.ur_ik_branches(base, &flange, &start);
         let tried: Vec<usize> = match shapes {
             Shapes::Taught => {
-                let taught = arm.ur_branch(base, &arm.from_ur_convention(&READY))?;
+                let taught = self.taught_branch()?;
                 if own == taught {
                     return None;
                 }
@@ -492,6 +492,13 @@ impl<W: World> Learned<'_, W> {
         })
     }
 
+    /// The inverse-kinematics branch the policy was taught on: that of the
+    /// UR "ready" pose (`None` on a non-UR arm).
+    fn taught_branch(&self) -> Option<usize> {
+        let s = &self.station;
+        s.arm.ur_branch(&s.base, &s.arm.from_ur_convention(&READY))
+    }
+
     /// The policy's steps from an arm on another inverse-kinematics branch
     /// than it was taught on, taken on the taught branch (its joints for
     /// `start`'s flange pose) and each brought back to `start`'s own
@@ -515,7 +522,7 @@ impl<W: World> Learned<'_, W> {
         let s = &self.station;
         let (arm, base) = (s.arm, &s.base);
         let own = arm.ur_branch(base, &start)?;
-        let taught = arm.ur_branch(base, &arm.from_ur_convention(&READY))?;
+        let taught = self.taught_branch()?;
         if own == taught {
             return None;
         }
