@@ -148,6 +148,17 @@ impl SyntaxError {
                     "names are written with ASCII letters, digits and `_` only (`bench_2`, `apple`): `{c}` is not one of them"
                 ))
             }
+            // A turn written on a box or a product (`yaw 30 deg`): the
+            // help's form alone would silently drop it.
+            SyntaxError::Unexpected {
+                found,
+                context,
+                statement,
+                ..
+            } if is_turn(found) => Some(format!(
+                "the language has no yaw: boxes and products stand square to the cell's x and y axes (slots may stand anywhere in their box); {}",
+                context.help(statement.as_deref())
+            )),
             SyntaxError::Unexpected {
                 context, statement, ..
             } => Some(context.help(statement.as_deref())),
@@ -169,6 +180,25 @@ impl SyntaxError {
             )),
         }
     }
+}
+
+/// Whether a found text (`` `yaw` ``) is a word for a turn about the
+/// vertical, which the language does not have.
+fn is_turn(found: &str) -> bool {
+    const TURNS: [&str; 8] = [
+        "yaw",
+        "rotated",
+        "rotate",
+        "rotation",
+        "angle",
+        "turned",
+        "heading",
+        "orientation",
+    ];
+    found
+        .strip_prefix('`')
+        .and_then(|w| w.strip_suffix('`'))
+        .is_some_and(|w| TURNS.iter().any(|t| t.eq_ignore_ascii_case(w)))
 }
 
 /// The letter outside ASCII that a found text (`` `änch` ``) starts with.

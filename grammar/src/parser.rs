@@ -413,7 +413,10 @@ impl Builder {
                 Rule::suction_stmt => CellStmt::Suction(self.length(k.remove(1))),
                 Rule::lift_stmt => CellStmt::Lift(self.length(k.remove(1))),
                 Rule::speed_stmt => CellStmt::Speed(
-                    self.share(k.remove(1), "`%`, or no unit for a fraction (`speed 0.5`)"),
+                    self.share(
+                        k.remove(1),
+                        "`%` (a share of the arm's top joint speeds), or no unit for a fraction (`speed 0.5`)",
+                    ),
                 ),
                 Rule::descent_stmt => CellStmt::Descent(self.share(
                     k.remove(1),
@@ -1056,5 +1059,55 @@ mod tests {
         // Fewer errors than that: no stop.
         let few = parse(&"x\n".repeat(10)).expect_err("stray lines");
         assert_eq!(few.len(), 10);
+    }
+    /// A rate (`deg/s`) is one unknown unit under one caret, as `deg` is,
+    /// not a stray `/` after a unit.
+    #[test]
+    fn a_rate_is_one_unknown_unit() {
+        let cell = |stmt: &str| format!("cell c {{\n  {stmt}\n}}\n");
+        for (stmt, unit) in [
+            ("speed 30 deg/s", "deg/s"),
+            ("speed 30 deg", "deg"),
+            ("lift 150 mm/s", "mm/s"),
+        ] {
+            let text = cell(stmt);
+            let errors = parse(&text).expect_err(stmt);
+            let [
+                SyntaxError::UnknownUnit {
+                    span, unit: found, ..
+                },
+            ] = errors.as_slice()
+            else {
+                panic!("{stmt}: {errors:?}");
+            };
+            assert_eq!(found, unit);
+            assert_eq!(&text[span.start as usize..span.end as usize], unit);
+        }
+    }
+
+    /// A turn written on a box or an inventory's product is refused with a
+    /// help that says the language has no yaw, not only the form without
+    /// it; a word that is no turn keeps the plain help.
+    #[test]
+    fn a_yaw_gets_a_help_that_says_the_language_has_none() {
+        for text in [
+            "cell c {\n  box b (0, 0.6) size (0.3, 0.1, 0.08) yaw 30 deg\n}\n",
+            "inventory s for c {\n  A (0.5, -0.2) Rotated 45\n}\n",
+        ] {
+            let errors = parse(text).expect_err(text);
+            let help = errors
+                .first()
+                .and_then(SyntaxError::help)
+                .unwrap_or_default();
+            assert!(help.starts_with("the language has no yaw"), "{help}");
+            assert!(help.contains("write it as `"), "{help}");
+        }
+        let errors = parse("cell c {\n  box b (0, 0.6) size (0.3, 0.1, 0.08) tall\n}\n")
+            .expect_err("a stray word");
+        let help = errors
+            .first()
+            .and_then(SyntaxError::help)
+            .unwrap_or_default();
+        assert!(help.starts_with("write it as `box"), "{help}");
     }
 }
