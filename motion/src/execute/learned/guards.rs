@@ -34,7 +34,7 @@ use packwright_interface::outcome::Shortfall;
 use packwright_interface::record;
 use packwright_interface::scene::CellScene;
 use packwright_kinematics::body::{BOX_WALL, CUP_RADIUS, HELD_PADDING, PADDING};
-use packwright_kinematics::{Arm, DOF, Joints};
+use packwright_kinematics::{Arm, DOF, Joints, joint_distance};
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_6, PI, TAU};
 
 /// Segments of a learned descent down the vertical over its end, when the
@@ -217,6 +217,39 @@ pub(super) fn with_room(arm: &Arm, start: &Joints, end: Joints) -> Joints {
         }
     }
     out
+}
+
+/// Where the policy's steps from `start` ended in another arm shape
+/// (inverse-kinematics branch) than `start`'s: `end`'s pose in each other
+/// shape that reaches it, with room to the base's and wrist 3's limits
+/// ([`with_room`]), nearest `start` first; none where the steps kept the
+/// shape, or on a non-UR arm. Steps towards a point behind the base can
+/// swing the shoulder back over the top, the upper arm and forearm down
+/// on the table (helper R's cell 6210 with a model trained with `--seed
+/// 1`), where the expert's inverse kinematics takes the same cup pose
+/// with the elbow and wrist the other way.
+pub(super) fn other_shapes(
+    arm: &Arm,
+    base: &Isometry3<f64>,
+    start: &Joints,
+    end: &Joints,
+) -> Vec<Joints> {
+    let Some(own) = arm.ur_branch(base, end) else {
+        return Vec::new();
+    };
+    if arm.ur_branch(base, start) == Some(own) {
+        return Vec::new();
+    }
+    let mut others: Vec<Joints> = arm
+        .ur_ik_branches(base, &arm.flange_pose(base, end), start)
+        .into_iter()
+        .enumerate()
+        .filter(|&(b, _)| b != own)
+        .filter_map(|(_, q)| q)
+        .map(|q| with_room(arm, start, q))
+        .collect();
+    others.sort_by(|a, b| joint_distance(a, start).total_cmp(&joint_distance(b, start)));
+    others
 }
 
 /// The whole turn (±2π) that brings `to` nearer `from`, where `to` is
@@ -870,5 +903,38 @@ mod tests {
             let turn = shorter_turn(from, to).unwrap_or(0.0);
             assert!((to + turn - from).abs() <= PI, "{from} {to} {turn}");
         }
+    }
+    /// The other shapes of an end the policy's steps reached with the
+    /// shoulder swung back over the top (R's cell 6210): each is the same
+    /// flange pose on another branch, nearest the start first; the
+    /// expert's elbow-and-wrist-flipped solution there is among them.
+    #[test]
+    fn other_shapes_reach_the_same_pose_in_another_shape_nearest_first() {
+        let arm = Arm::ur10();
+        let base = Isometry3::translation(-0.291, 0.103, 0.0);
+        let start = [2.64, -2.05, 2.36, -1.88, -1.57, -2.07];
+        let end = [1.76, -3.37, 1.76, 0.04, -1.57, -2.96];
+        let own = arm.ur_branch(&base, &end).expect("a UR branch");
+        let pose = arm.flange_pose(&base, &end);
+        let others = other_shapes(&arm, &base, &start, &end);
+        assert!(others.len() >= 3, "{others:?}");
+        for q in &others {
+            let p = arm.flange_pose(&base, q);
+            assert!((p.translation.vector - pose.translation.vector).norm() < 1e-9);
+            assert!(p.rotation.angle_to(&pose.rotation) < 1e-9);
+            assert_ne!(arm.ur_branch(&base, q), Some(own), "{q:?}");
+            assert!(arm.within_limits(q), "{q:?}");
+        }
+        let distances: Vec<f64> = others.iter().map(|q| joint_distance(q, &start)).collect();
+        assert!(distances.is_sorted(), "{distances:?}");
+        // The expert's shape there: the shoulder up, the elbow below.
+        assert!(
+            others.iter().any(|q| q[1] > -2.0 && q[2] < 0.0),
+            "{others:?}"
+        );
+        // Steps that kept the start's shape, or joints on no branch (not
+        // finite), have no other shape.
+        assert!(other_shapes(&arm, &base, &start, &start).is_empty());
+        assert!(other_shapes(&arm, &base, &start, &[f64::NAN; 6]).is_empty());
     }
 }

@@ -29,7 +29,7 @@ use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
 use guards::{
     COLLIDING_RELEASE_RAISE, Inside, KEEP_INSIDE, MAX_ABOVE_RIM, descent_vias, held_at_limits,
-    level_vias, nearer_middle, release_collides, shorter_turn, swing_via, with_room,
+    level_vias, nearer_middle, other_shapes, release_collides, shorter_turn, swing_via, with_room,
 };
 use nalgebra::Vector3;
 use packwright_interface::outcome::{
@@ -307,11 +307,20 @@ impl<W: World> Learned<'_, W> {
             Err(straight) if ways == Ways::Straight => Err(why(straight)),
             // Every other way ends where this one does: where the end
             // itself collides (a release a millimetre or two low, the
-            // held product on the floor), none of them is tried.
+            // held product on the floor), none of them is tried. Steps
+            // that ended in another arm shape than they started in (the
+            // shoulder swung back over the top to a point behind the
+            // base, the forearm on the table) take the same pose in the
+            // nearest other shape that stands free, as the expert's
+            // inverse kinematics takes its nearest free solution.
             Err(Unchecked::Collides(hit))
                 if s.checker.check(&end, load.held, load.ignore).is_some() =>
             {
-                Err(Shortfall::Collides { hit })
+                other_shapes(arm, base, &start, &end)
+                    .into_iter()
+                    .filter(|q| s.checker.check(q, load.held, load.ignore).is_none())
+                    .find_map(|q| s.route(Connect::Straight, 0, start, q, load).ok())
+                    .ok_or(Shortfall::Collides { hit })
             }
             Err(straight) => {
                 // A descent (into a slot, onto a top face) whose straight
