@@ -15,7 +15,8 @@
 //! asked again at each scenario's draw, and the scenarios named
 //! ([`Warning::DrawnOutOfReach`]).
 //!
-//! Invariants: only `scenarios` suites with a jitter are asked about, and
+//! Invariants: only suites with a jitter are asked about (a `scenarios`
+//! block's, or a single `scenario`'s: one case, the order's picks), and
 //! only their picks that W001 does not already warn about (at the
 //! written places, the others widened by the jitter, the pick is free);
 //! one warning per suite, picked product and product met; a case is asked
@@ -26,28 +27,79 @@
 //! [`workspace`]: crate::workspace
 
 use crate::expand::{Case, Expanded};
-use crate::model::{Model, ScenariosDef};
+use crate::model::Model;
+use crate::source::Loc;
 use crate::warning::Warning;
 use crate::workspace::{Pose, Standing, Workspace, along_from_base};
 use packwright_grammar::ast::SequenceMode;
 use std::collections::BTreeMap;
 
+/// A suite the jitter draws: a `scenarios` block's cases, or a single
+/// `scenario`'s one case.
+struct Drawn<'a> {
+    name: &'a str,
+    /// A single `scenario` (its one case named as the suite is).
+    single: bool,
+    inventory: usize,
+    /// The inventory entries its cases may pick.
+    picks: Vec<usize>,
+    jitter: f64,
+    /// Its `jitter` statement, else the block.
+    at: Loc,
+    cases: &'a [Case],
+}
+
+/// The suites of `x` (expanded from `m`) that the jitter draws.
+fn drawn<'a>(m: &'a Model, x: &'a Expanded) -> Vec<Drawn<'a>> {
+    let cases = |kind: &str, name: &str| {
+        x.suites
+            .iter()
+            .find(|x| x.kind == kind && x.name == name)
+            .map(|x| x.cases.as_slice())
+    };
+    let sets = m
+        .scenario_sets
+        .iter()
+        .filter(|s| s.jitter > 0.0)
+        .filter_map(|s| {
+            Some(Drawn {
+                name: &s.name,
+                single: false,
+                inventory: s.inventory,
+                picks: s.choose.entries.clone(),
+                jitter: s.jitter,
+                at: s.jitter_loc.unwrap_or(s.loc),
+                cases: cases("scenarios", &s.name)?,
+            })
+        });
+    let singles = m
+        .scenarios
+        .iter()
+        .filter(|s| s.jitter > 0.0)
+        .filter_map(|s| {
+            let order = m.orders.get(s.order)?;
+            Some(Drawn {
+                name: &s.name,
+                single: true,
+                inventory: order.inventory,
+                picks: order.assignment.iter().map(|a| a.entry).collect(),
+                jitter: s.jitter,
+                at: s.jitter_loc.unwrap_or(s.loc),
+                cases: cases("scenario", &s.name)?,
+            })
+        });
+    sets.chain(singles).collect()
+}
+
 /// The warnings for every suite of `x` (expanded from `m`).
 pub fn check(m: &Model, x: &Expanded, ws: &dyn Workspace) -> Vec<Warning> {
     let mut warnings = Vec::new();
-    for s in m.scenario_sets.iter().filter(|s| s.jitter > 0.0) {
-        let Some(suite) = x
-            .suites
-            .iter()
-            .find(|x| x.kind == "scenarios" && x.name == s.name)
-        else {
-            continue;
-        };
-        for entry in suspects(m, s, ws) {
-            warnings.extend(blocked_in(m, s, entry, &suite.cases, ws));
+    for s in drawn(m, x) {
+        for entry in suspects(m, &s, ws) {
+            warnings.extend(blocked_in(m, &s, entry, ws));
         }
-        for entry in near_the_edge(m, s, ws) {
-            warnings.extend(out_of_reach_in(m, s, entry, &suite.cases, ws));
+        for entry in near_the_edge(m, &s, ws) {
+            warnings.extend(out_of_reach_in(m, &s, entry, ws));
         }
     }
     warnings
@@ -58,17 +110,18 @@ pub fn check(m: &Model, x: &Expanded, ws: &dyn Workspace) -> Vec<Warning> {
 /// along the line from the robot's base axis (√2 times it: a draw's
 /// farthest reach), nearer or farther: a few questions per entry, asked
 /// again at each scenario's draw only for these.
-fn near_the_edge(m: &Model, s: &ScenariosDef, ws: &dyn Workspace) -> Vec<usize> {
+fn near_the_edge(m: &Model, s: &Drawn, ws: &dyn Workspace) -> Vec<usize> {
     let inv = &m.inventories[s.inventory];
     let Some(cell) = m.cells.get(inv.cell) else {
         return Vec::new();
     };
-    s.choose
-        .entries
+    s.picks
         .iter()
         .copied()
         .filter(|&k| {
-            let e = &inv.entries[k];
+            let Some(e) = inv.entries.get(k) else {
+                return false;
+            };
             let reach = std::f64::consts::SQRT_2 * s.jitter;
             let out_of_reach = |by: f64| {
                 along_from_base(cell.base, e.at, by)
@@ -82,20 +135,14 @@ fn near_the_edge(m: &Model, s: &ScenariosDef, ws: &dyn Workspace) -> Vec<usize> 
 
 /// The warning for entry `k` of `s`, if the empty cell does not let the
 /// robot pick it where some of the cases draw it.
-fn out_of_reach_in(
-    m: &Model,
-    s: &ScenariosDef,
-    k: usize,
-    cases: &[Case],
-    ws: &dyn Workspace,
-) -> Option<Warning> {
+fn out_of_reach_in(m: &Model, s: &Drawn, k: usize, ws: &dyn Workspace) -> Option<Warning> {
     let inv = &m.inventories[s.inventory];
     let cell = m.cells.get(inv.cell)?;
-    let entry = &inv.entries[k];
+    let entry = inv.entries.get(k)?;
     let from_base = |at: [f64; 2]| (at[0] - cell.base[0]).hypot(at[1] - cell.base[1]);
     let written = from_base(entry.at);
     let mut out: Vec<(String, Pose, bool)> = Vec::new();
-    for case in cases {
+    for case in s.cases {
         let Some(at) = picked_at(case, k) else {
             continue;
         };
@@ -109,9 +156,10 @@ fn out_of_reach_in(
         .all(|(_, _, n)| *n == first_nearer)
         .then_some(first_nearer);
     Some(Warning::DrawnOutOfReach {
-        at: s.jitter_loc.unwrap_or(s.loc),
-        suite: s.name.clone(),
-        suite_cases: s.count,
+        at: s.at,
+        suite: s.name.to_owned(),
+        suite_cases: s.cases.len(),
+        single: s.single,
         product: m.products[entry.product].name.clone(),
         product_at: entry.loc,
         pose,
@@ -124,7 +172,7 @@ fn out_of_reach_in(
 /// The entries `s` may pick whose pick is free at the written places with
 /// the others widened by the jitter (else W001 warns), and blocked with
 /// them widened by twice the jitter.
-fn suspects(m: &Model, s: &ScenariosDef, ws: &dyn Workspace) -> Vec<usize> {
+fn suspects(m: &Model, s: &Drawn, ws: &dyn Workspace) -> Vec<usize> {
     let inv = &m.inventories[s.inventory];
     let others = |k: usize, margin: f64| -> Vec<Standing> {
         inv.entries
@@ -138,12 +186,13 @@ fn suspects(m: &Model, s: &ScenariosDef, ws: &dyn Workspace) -> Vec<usize> {
             })
             .collect()
     };
-    s.choose
-        .entries
+    s.picks
         .iter()
         .copied()
         .filter(|&k| {
-            let e = &inv.entries[k];
+            let Some(e) = inv.entries.get(k) else {
+                return false;
+            };
             let blocked = |margin| {
                 ws.pick_among(m, inv.cell, e.product, e.at, &others(k, margin))
                     .is_some()
@@ -169,18 +218,24 @@ fn number(case: &Case) -> &str {
 }
 
 /// Whether entry `j` of inventory `i` is packed before entry `k`, by the
-/// order the inventory's `demos` blocks declare, when they all declare
-/// the same one (ascending or descending inventory order, or one `listed`
-/// priority naming both); by inventory order where nothing demonstrates
-/// the inventory (the order packed when no demonstration shows one);
-/// `None` when they do not say.
+/// order the inventory's demonstrations declare, when they all declare
+/// the same one: each `demos` block's rule (ascending or descending
+/// inventory order, or one `listed` priority naming both) and each
+/// hand-written `demo` that moves both (its sequence); by inventory
+/// order where nothing demonstrates the inventory (the order packed when
+/// no demonstration shows one); `None` when they do not say, or
+/// disagree.
 fn packed_before(m: &Model, i: usize, j: usize, k: usize) -> Option<bool> {
-    let demonstrated = m.demo_sets.iter().any(|d| d.inventory == i)
-        || m.demos.iter().any(|d| m.orders[d.order].inventory == i);
-    if !demonstrated {
+    let written: Vec<&crate::model::DemoDef> = m
+        .demos
+        .iter()
+        .filter(|d| m.orders.get(d.order).is_some_and(|o| o.inventory == i))
+        .collect();
+    let blocks: Vec<_> = m.demo_sets.iter().filter(|d| d.inventory == i).collect();
+    if blocks.is_empty() && written.is_empty() {
         return Some(j < k);
     }
-    let mut rules = m.demo_sets.iter().filter(|d| d.inventory == i).map(|d| {
+    let generated = blocks.iter().map(|d| {
         let place = |e: usize| d.choose.entries.iter().position(|&x| x == e);
         match d.sequence {
             SequenceMode::Ascending => Some(j < k),
@@ -189,23 +244,23 @@ fn packed_before(m: &Model, i: usize, j: usize, k: usize) -> Option<bool> {
             SequenceMode::Random => None,
         }
     });
+    // A hand-written demonstration says only about the products it moves.
+    let shown = written.iter().filter_map(|d| {
+        let place = |e: usize| d.sequence.iter().position(|&x| x == e);
+        Some(Some(place(j)? < place(k)?))
+    });
+    let mut rules = generated.chain(shown);
     let first = rules.next()??;
     rules.all(|r| r == Some(first)).then_some(first)
 }
 
 /// The warnings for entry `k` of `s`: per product met, the cases where
 /// the pick of `k`, at its drawn place, is blocked by it.
-fn blocked_in(
-    m: &Model,
-    s: &ScenariosDef,
-    k: usize,
-    cases: &[Case],
-    ws: &dyn Workspace,
-) -> Vec<Warning> {
+fn blocked_in(m: &Model, s: &Drawn, k: usize, ws: &dyn Workspace) -> Vec<Warning> {
     let inv = &m.inventories[s.inventory];
     let before = |j: usize| packed_before(m, s.inventory, j, k);
     let mut by_other: BTreeMap<usize, Vec<String>> = BTreeMap::new();
-    for case in cases {
+    for case in s.cases {
         let setup = &case.setup;
         let Some(at) = picked_at(case, k) else {
             continue;
@@ -247,9 +302,10 @@ fn blocked_in(
     by_other
         .into_iter()
         .map(|(j, cases)| Warning::DrawnPickBlocked {
-            at: s.jitter_loc.unwrap_or(s.loc),
-            suite: s.name.clone(),
-            suite_cases: s.count,
+            at: s.at,
+            suite: s.name.to_owned(),
+            suite_cases: s.cases.len(),
+            single: s.single,
             product: name(k),
             by: name(j),
             by_at: inv.entries[j].loc,

@@ -72,6 +72,8 @@ pub enum Warning {
         suite: String,
         /// How many scenarios the suite has.
         suite_cases: usize,
+        /// A single `scenario` (its one case is the suite).
+        single: bool,
         product: String,
         /// The product met, and its inventory entry.
         by: String,
@@ -90,6 +92,8 @@ pub enum Warning {
         suite: String,
         /// How many scenarios the suite has.
         suite_cases: usize,
+        /// A single `scenario` (its one case is the suite).
+        single: bool,
         product: String,
         /// Its inventory entry.
         product_at: Loc,
@@ -233,29 +237,33 @@ impl fmt::Display for Warning {
             Warning::DrawnPickBlocked {
                 suite,
                 suite_cases,
+                single,
                 product,
                 by,
                 cases,
                 ..
-            } => write!(
-                f,
-                "in {} of {suite_cases} scenarios of `{suite}` ({}) the robot cannot pick `{product}` where the jitter draws it while `{by}` stands",
-                cases.len(),
-                cases.join(", ")
-            ),
+            } => {
+                write_drawn(f, suite, *suite_cases, *single, cases)?;
+                write!(
+                    f,
+                    " the robot cannot pick `{product}` where the jitter draws it while `{by}` stands"
+                )
+            }
             Warning::DrawnOutOfReach {
                 suite,
                 suite_cases,
+                single,
                 product,
                 pose,
                 cases,
                 ..
-            } => write!(
-                f,
-                "in {} of {suite_cases} scenarios of `{suite}` ({}) the robot cannot pick `{product}` where the jitter draws it: {pose} is out of its reach",
-                cases.len(),
-                cases.join(", ")
-            ),
+            } => {
+                write_drawn(f, suite, *suite_cases, *single, cases)?;
+                write!(
+                    f,
+                    " the robot cannot pick `{product}` where the jitter draws it: {pose} is out of its reach"
+                )
+            }
             Warning::TooClose {
                 a,
                 slot_a,
@@ -289,6 +297,36 @@ impl fmt::Display for Warning {
                 "the demonstrations of cell `{cell}` follow no one sequence rule: the best, {best}, explains {agree} of {demonstrations}"
             ),
         }
+    }
+}
+
+/// What a drawn warning's help calls the scenarios it names.
+fn these(single: bool) -> &'static str {
+    if single {
+        "this scenario"
+    } else {
+        "these scenarios"
+    }
+}
+
+/// Which scenarios a drawn warning is about: "in scenario `x`" for a
+/// single `scenario`, else "in 2 of 10 scenarios of `suite` (03, 07)".
+fn write_drawn(
+    f: &mut fmt::Formatter<'_>,
+    suite: &str,
+    suite_cases: usize,
+    single: bool,
+    cases: &[String],
+) -> fmt::Result {
+    if single {
+        write!(f, "in scenario `{suite}`")
+    } else {
+        write!(
+            f,
+            "in {} of {suite_cases} scenarios of `{suite}` ({})",
+            cases.len(),
+            cases.join(", ")
+        )
     }
 }
 
@@ -498,11 +536,20 @@ impl Warning {
             Warning::PlaceBlocked { product, .. } => format!(
                 "a package places `{product}` there only once the products in the arm's way are gone: pack those first, or move them or the box"
             ),
-            Warning::DrawnPickBlocked { product, by, .. } => format!(
-                "these scenarios can fail with every planner: move `{product}` and `{by}` further apart, or lower the jitter"
+            Warning::DrawnPickBlocked {
+                product,
+                by,
+                single,
+                ..
+            } => format!(
+                "{} can fail with every planner: move `{product}` and `{by}` further apart, or lower the jitter",
+                these(*single)
             ),
             Warning::DrawnOutOfReach {
-                product, nearer, ..
+                product,
+                nearer,
+                single,
+                ..
             } => {
                 let way = match nearer {
                     Some(true) => format!(
@@ -513,9 +560,12 @@ impl Warning {
                     ),
                     None => format!("move `{product}` where the arm reaches round it"),
                 };
-                format!(
-                    "these scenarios fail with every planner: {way} by the jitter, or lower the jitter"
-                )
+                let fail = if *single {
+                    "this scenario fails"
+                } else {
+                    "these scenarios fail"
+                };
+                format!("{fail} with every planner: {way} by the jitter, or lower the jitter")
             }
             Warning::TooClose { gap_mm, .. } => format!(
                 "the one packed second cannot be lowered past the other: it is let go above the other's top and can land on it; move the slots at least {:.1} mm further apart",

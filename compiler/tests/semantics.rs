@@ -624,6 +624,73 @@ fn a_pick_the_suites_draws_block_is_a_warning_naming_those_scenarios() {
     }
 }
 
+/// W003 for single `scenario` blocks, whose order hand-written `demo`s
+/// teach (helper U's cell 6407: a flat product picked while a heavy cube
+/// drawn 19 mm from it still stood, every planner failed, and `check` was
+/// silent). Each scenario is one draw of the order `o` (A and B); a demo
+/// packing A first leaves B standing at A's pick: the warning names each
+/// scenario where the draw brings them nearer than the workspace allows,
+/// one warning per scenario. A demo packing B first: no warning; two
+/// demos that disagree do not say, and a product that may be gone is not
+/// asked about: no warning either.
+#[test]
+fn a_single_scenario_the_draw_blocks_is_a_warning_with_the_order_hand_written_demos_teach() {
+    let scenarios: String = (1..=30)
+        .map(|i| format!("scenario s{i:02} for o {{\n jitter 5 mm\n seed {i}\n}}\n"))
+        .collect();
+    let demo = |name: &str, first: &str, then: &str| {
+        format!("demo {name} for o {{\n sequence {first}, {then}\n}}\n")
+    };
+    for (demos, b_stands) in [
+        (demo("d", "A", "B"), true),
+        (demo("d", "B", "A"), false),
+        (demo("d", "A", "B") + &demo("e", "B", "A"), false),
+    ] {
+        let loader = MemoryLoader::new().with(
+            "main.pack",
+            format!("{CELL}\norder o for stock5 {{\n A -> g1\n B -> g2\n}}\n{demos}{scenarios}"),
+        );
+        let c = match check(&loader, &[PathBuf::from("main.pack")], &Near) {
+            Ok(c) => c,
+            Err(f) => panic!("{:#?}", f.errors),
+        };
+        let (a, b) = (0, 1);
+        let expected: Vec<String> = c
+            .expanded
+            .suites
+            .iter()
+            .filter(|suite| suite.kind == "scenario")
+            .filter(|suite| {
+                let s = &suite.cases[0].setup;
+                b_stands && (s.positions[b][0] - s.positions[a][0]).abs() < NEAR
+            })
+            .map(|suite| suite.name.clone())
+            .collect();
+        // Some draws, not all: the 120 mm between them shrinks by up to 10.
+        assert_eq!(expected.is_empty(), !b_stands, "{demos}: {expected:?}");
+        assert!(expected.len() < 30, "{expected:?}");
+        let named: Vec<String> = c
+            .warnings
+            .iter()
+            .filter_map(|w| match w {
+                Warning::DrawnPickBlocked {
+                    product,
+                    by,
+                    suite,
+                    single: true,
+                    ..
+                } if product == "A" && by == "B" => Some(suite.clone()),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(named, expected, "{demos}: {:#?}", c.warnings);
+        let first = c.warnings.iter().find(|w| w.code() == "W003");
+        if let Some(w) = first {
+            assert!(w.to_string().starts_with("in scenario `s"), "{w}");
+        }
+    }
+}
+
 /// A workspace that lets every product go `DEEP` above the floor in slot
 /// `g4` and at the usual 5 mm elsewhere.
 struct Deep;
