@@ -27,26 +27,30 @@
 //! [`workspace`]: crate::workspace
 
 use crate::expand::{Case, Expanded};
-use crate::model::Model;
+use crate::model::{DemosDef, Model};
 use crate::source::Loc;
-use crate::warning::Warning;
+use crate::warning::{Draws, Warning};
 use crate::workspace::{Pose, Standing, Workspace, along_from_base};
 use packwright_grammar::ast::SequenceMode;
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 
-/// A suite the jitter draws: a `scenarios` block's cases, or a single
-/// `scenario`'s one case.
+/// A suite the jitter draws: a `scenarios` block's cases, a single
+/// `scenario`'s one case, or a `demos` block's demonstrations.
 struct Drawn<'a> {
     name: &'a str,
-    /// A single `scenario` (its one case named as the suite is).
-    single: bool,
+    draws: Draws,
     inventory: usize,
     /// The inventory entries its cases may pick.
     picks: Vec<usize>,
     jitter: f64,
     /// Its `jitter` statement, else the block.
     at: Loc,
-    cases: &'a [Case],
+    cases: Cow<'a, [Case]>,
+    /// Each case's order of picks, for demonstrations (their sequences);
+    /// empty for scenarios, whose order the demonstrations declare
+    /// ([`packed_before`]).
+    sequences: Vec<Vec<usize>>,
 }
 
 /// The suites of `x` (expanded from `m`) that the jitter draws.
@@ -55,7 +59,7 @@ fn drawn<'a>(m: &'a Model, x: &'a Expanded) -> Vec<Drawn<'a>> {
         x.suites
             .iter()
             .find(|x| x.kind == kind && x.name == name)
-            .map(|x| x.cases.as_slice())
+            .map(|x| Cow::Borrowed(x.cases.as_slice()))
     };
     let sets = m
         .scenario_sets
@@ -64,12 +68,13 @@ fn drawn<'a>(m: &'a Model, x: &'a Expanded) -> Vec<Drawn<'a>> {
         .filter_map(|s| {
             Some(Drawn {
                 name: &s.name,
-                single: false,
+                draws: Draws::Scenarios,
                 inventory: s.inventory,
                 picks: s.choose.entries.clone(),
                 jitter: s.jitter,
                 at: s.jitter_loc.unwrap_or(s.loc),
                 cases: cases("scenarios", &s.name)?,
+                sequences: Vec::new(),
             })
         });
     let singles = m
@@ -80,15 +85,66 @@ fn drawn<'a>(m: &'a Model, x: &'a Expanded) -> Vec<Drawn<'a>> {
             let order = m.orders.get(s.order)?;
             Some(Drawn {
                 name: &s.name,
-                single: true,
+                draws: Draws::Scenario,
                 inventory: order.inventory,
                 picks: order.assignment.iter().map(|a| a.entry).collect(),
                 jitter: s.jitter,
                 at: s.jitter_loc.unwrap_or(s.loc),
                 cases: cases("scenario", &s.name)?,
+                sequences: Vec::new(),
             })
         });
-    sets.chain(singles).collect()
+    sets.chain(singles).chain(demonstrated(m, x)).collect()
+}
+
+/// The `demos` blocks with a jitter, each with its demonstrations as
+/// cases (numbered among all the file's demonstrations from 1, as
+/// `train` names one it cannot replay) and their sequences. A block whose demonstrations cannot be generated is left
+/// out (expansion reported why).
+fn demonstrated<'a>(m: &'a Model, x: &'a Expanded) -> Vec<Drawn<'a>> {
+    let jittered: Vec<(usize, &DemosDef, usize)> = x
+        .blocks
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| b.kind == "demos")
+        .filter_map(|(i, b)| {
+            let d = m.demo_sets.iter().find(|d| d.name == b.name)?;
+            (d.jitter > 0.0).then_some((i, d, b.first_demo))
+        })
+        .collect();
+    if jittered.is_empty() {
+        return Vec::new();
+    }
+    let mut drawn: Vec<Drawn> = jittered
+        .iter()
+        .map(|(_, d, _)| Drawn {
+            name: &d.name,
+            draws: Draws::Demonstrations,
+            inventory: d.inventory,
+            picks: d.choose.entries.clone(),
+            jitter: d.jitter,
+            at: d.jitter_loc.unwrap_or(d.loc),
+            cases: Cow::Owned(Vec::new()),
+            sequences: Vec::new(),
+        })
+        .collect();
+    for demo in x.demonstrations(m) {
+        let Ok(demo) = demo else {
+            return Vec::new();
+        };
+        let Some(at) = jittered.iter().position(|(b, ..)| *b == demo.block) else {
+            continue;
+        };
+        let first = jittered[at].2;
+        let d = &mut drawn[at];
+        let number = first + d.cases.len() + 1;
+        d.cases.to_mut().push(Case {
+            name: number.to_string(),
+            setup: demo.setup,
+        });
+        d.sequences.push(demo.sequence);
+    }
+    drawn
 }
 
 /// The warnings for every suite of `x` (expanded from `m`).
@@ -142,7 +198,7 @@ fn out_of_reach_in(m: &Model, s: &Drawn, k: usize, ws: &dyn Workspace) -> Option
     let from_base = |at: [f64; 2]| (at[0] - cell.base[0]).hypot(at[1] - cell.base[1]);
     let written = from_base(entry.at);
     let mut out: Vec<(String, Pose, bool)> = Vec::new();
-    for case in s.cases {
+    for case in s.cases.iter() {
         let Some(at) = picked_at(case, k) else {
             continue;
         };
@@ -159,7 +215,7 @@ fn out_of_reach_in(m: &Model, s: &Drawn, k: usize, ws: &dyn Workspace) -> Option
         at: s.at,
         suite: s.name.to_owned(),
         suite_cases: s.cases.len(),
-        single: s.single,
+        draws: s.draws,
         product: m.products[entry.product].name.clone(),
         product_at: entry.loc,
         pose,
@@ -260,10 +316,16 @@ fn blocked_in(m: &Model, s: &Drawn, k: usize, ws: &dyn Workspace) -> Vec<Warning
     let inv = &m.inventories[s.inventory];
     let before = |j: usize| packed_before(m, s.inventory, j, k);
     let mut by_other: BTreeMap<usize, Vec<String>> = BTreeMap::new();
-    for case in s.cases {
+    for (c, case) in s.cases.iter().enumerate() {
         let setup = &case.setup;
         let Some(at) = picked_at(case, k) else {
             continue;
+        };
+        // A demonstration's own sequence says what it packs before `k`.
+        let place = |e: usize| s.sequences.get(c)?.iter().position(|&x| x == e);
+        let packed_first = |j: usize| match (place(j), place(k)) {
+            (Some(pj), Some(pk)) => Some(pj < pk),
+            _ => before(j),
         };
         // The others standing when `k` is picked, with their entries: not
         // missing, not packed by a worker, and not packed before it (a
@@ -273,7 +335,7 @@ fn blocked_in(m: &Model, s: &Drawn, k: usize, ws: &dyn Workspace) -> Vec<Warning
             j != k
                 && !setup.missing.contains(&j)
                 && !setup.human_packed.contains(&j)
-                && (setup.slot_of(j).is_none() || before(j) == Some(false))
+                && (setup.slot_of(j).is_none() || packed_first(j) == Some(false))
         };
         let (standing, entries): (Vec<Standing>, Vec<usize>) = (0..inv.entries.len())
             .filter(|&j| stands(j))
@@ -305,7 +367,7 @@ fn blocked_in(m: &Model, s: &Drawn, k: usize, ws: &dyn Workspace) -> Vec<Warning
             at: s.at,
             suite: s.name.to_owned(),
             suite_cases: s.cases.len(),
-            single: s.single,
+            draws: s.draws,
             product: name(k),
             by: name(j),
             by_at: inv.entries[j].loc,

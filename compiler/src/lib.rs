@@ -31,7 +31,7 @@ pub use emit::{Written, file};
 pub use error::Error;
 pub use output::{Artifact, MemoryOutput, Output, OutputFile};
 pub use source::{FileId, Loader, Loc, MemoryLoader, SourceMap, Unreadable};
-pub use warning::{HELD_ROOM, RELEASE_GAP_MM, Warning};
+pub use warning::{Draws, HELD_ROOM, RELEASE_GAP_MM, Warning};
 pub use workspace::{Anywhere, Workspace};
 
 use std::path::PathBuf;

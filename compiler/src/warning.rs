@@ -72,8 +72,8 @@ pub enum Warning {
         suite: String,
         /// How many scenarios the suite has.
         suite_cases: usize,
-        /// A single `scenario` (its one case is the suite).
-        single: bool,
+        /// What the suite's cases are.
+        draws: Draws,
         product: String,
         /// The product met, and its inventory entry.
         by: String,
@@ -92,8 +92,8 @@ pub enum Warning {
         suite: String,
         /// How many scenarios the suite has.
         suite_cases: usize,
-        /// A single `scenario` (its one case is the suite).
-        single: bool,
+        /// What the suite's cases are.
+        draws: Draws,
         product: String,
         /// Its inventory entry.
         product_at: Loc,
@@ -237,13 +237,13 @@ impl fmt::Display for Warning {
             Warning::DrawnPickBlocked {
                 suite,
                 suite_cases,
-                single,
+                draws,
                 product,
                 by,
                 cases,
                 ..
             } => {
-                write_drawn(f, suite, *suite_cases, *single, cases)?;
+                write_drawn(f, suite, *suite_cases, *draws, cases)?;
                 write!(
                     f,
                     " the robot cannot pick `{product}` where the jitter draws it while `{by}` stands"
@@ -252,13 +252,13 @@ impl fmt::Display for Warning {
             Warning::DrawnOutOfReach {
                 suite,
                 suite_cases,
-                single,
+                draws,
                 product,
                 pose,
                 cases,
                 ..
             } => {
-                write_drawn(f, suite, *suite_cases, *single, cases)?;
+                write_drawn(f, suite, *suite_cases, *draws, cases)?;
                 write!(
                     f,
                     " the robot cannot pick `{product}` where the jitter draws it: {pose} is out of its reach"
@@ -300,34 +300,39 @@ impl fmt::Display for Warning {
     }
 }
 
-/// What a drawn warning's help calls the scenarios it names.
-fn these(single: bool) -> &'static str {
-    if single {
-        "this scenario"
-    } else {
-        "these scenarios"
-    }
+/// What the cases of a drawn warning (W003, W006) are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Draws {
+    /// A `scenarios` block's scenarios.
+    Scenarios,
+    /// A single `scenario` (its one case is the block).
+    Scenario,
+    /// A `demos` block's demonstrations, which the expert replays for
+    /// `train`.
+    Demonstrations,
 }
 
-/// Which scenarios a drawn warning is about: "in scenario `x`" for a
-/// single `scenario`, else "in 2 of 10 scenarios of `suite` (03, 07)".
+/// Which cases a drawn warning is about: "in scenario `x`" for a single
+/// `scenario`, else "in 2 of 10 scenarios of `suite` (03, 07)" or "in 1
+/// of 24 demonstrations of `teach` (05)".
 fn write_drawn(
     f: &mut fmt::Formatter<'_>,
     suite: &str,
     suite_cases: usize,
-    single: bool,
+    draws: Draws,
     cases: &[String],
 ) -> fmt::Result {
-    if single {
-        write!(f, "in scenario `{suite}`")
-    } else {
-        write!(
-            f,
-            "in {} of {suite_cases} scenarios of `{suite}` ({})",
-            cases.len(),
-            cases.join(", ")
-        )
-    }
+    let what = match draws {
+        Draws::Scenario => return write!(f, "in scenario `{suite}`"),
+        Draws::Scenarios => "scenarios",
+        Draws::Demonstrations => "demonstrations",
+    };
+    write!(
+        f,
+        "in {} of {suite_cases} {what} of `{suite}` ({})",
+        cases.len(),
+        cases.join(", ")
+    )
 }
 
 /// "while `other` stands at (x, y)", or "up to J mm from" there where
@@ -539,16 +544,24 @@ impl Warning {
             Warning::DrawnPickBlocked {
                 product,
                 by,
-                single,
+                draws,
                 ..
-            } => format!(
-                "{} can fail with every planner: move `{product}` and `{by}` further apart, or lower the jitter",
-                these(*single)
-            ),
+            } => {
+                let fail = match draws {
+                    Draws::Scenario => "this scenario can fail with every planner",
+                    Draws::Scenarios => "these scenarios can fail with every planner",
+                    Draws::Demonstrations => {
+                        "the expert cannot replay these demonstrations, and `train` stops at the first"
+                    }
+                };
+                format!(
+                    "{fail}: move `{product}` and `{by}` further apart, or lower the jitter"
+                )
+            }
             Warning::DrawnOutOfReach {
                 product,
                 nearer,
-                single,
+                draws,
                 ..
             } => {
                 let way = match nearer {
@@ -560,12 +573,14 @@ impl Warning {
                     ),
                     None => format!("move `{product}` where the arm reaches round it"),
                 };
-                let fail = if *single {
-                    "this scenario fails"
-                } else {
-                    "these scenarios fail"
+                let fail = match draws {
+                    Draws::Scenario => "this scenario fails with every planner",
+                    Draws::Scenarios => "these scenarios fail with every planner",
+                    Draws::Demonstrations => {
+                        "the expert cannot replay these demonstrations, and `train` stops at the first"
+                    }
                 };
-                format!("{fail} with every planner: {way} by the jitter, or lower the jitter")
+                format!("{fail}: {way} by the jitter, or lower the jitter")
             }
             Warning::TooClose { gap_mm, .. } => format!(
                 "the one packed second cannot be lowered past the other: it is let go above the other's top and can land on it; move the slots at least {:.1} mm further apart",

@@ -2,7 +2,7 @@
 
 use packwright_compiler::model::Model;
 use packwright_compiler::workspace::{Blocked, Lower, Pose, Released, Standing, Unreached};
-use packwright_compiler::{Anywhere, Compiled, Error, MemoryLoader, Warning, check};
+use packwright_compiler::{Anywhere, Compiled, Draws, Error, MemoryLoader, Warning, check};
 use std::path::PathBuf;
 
 const CELL: &str = "
@@ -484,7 +484,8 @@ fn standing_products_block_the_start_as_an_error_and_a_pick_as_a_warning() {
     // where written, once it is blocked within the jitter); then W003's,
     // about the suite's picks (at the written places with the others
     // widened by its 5 mm jitter and by twice that: B is blocked by
-    // neither, A already by W001, so no scenario is asked about).
+    // neither, A already by W001, so no scenario is asked about), and the
+    // same about the `demos` block's, at its 8 mm.
     let (w001, draws) = asked.split_at(asked.len().min(3));
     let names: Vec<&str> = w001.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(names, ["A", "A", "B"], "C and E are packed by nothing");
@@ -498,7 +499,17 @@ fn standing_products_block_the_start_as_an_error_and_a_pick_as_a_warning() {
         .iter()
         .map(|(n, m)| (n.as_str(), m.first().copied().unwrap_or(f64::NAN)))
         .collect();
-    assert_eq!(draws, [("A", 0.005), ("B", 0.005), ("B", 0.01)]);
+    assert_eq!(
+        draws,
+        [
+            ("A", 0.005),
+            ("B", 0.005),
+            ("B", 0.01),
+            ("A", 0.008),
+            ("B", 0.008),
+            ("B", 0.016)
+        ]
+    );
     for (_, margins) in w001 {
         assert_eq!(margins.len(), 3, "the other three of the four entries");
         assert!(
@@ -677,7 +688,7 @@ fn a_single_scenario_the_draw_blocks_is_a_warning_with_the_order_hand_written_de
                     product,
                     by,
                     suite,
-                    single: true,
+                    draws: Draws::Scenario,
                     ..
                 } if product == "A" && by == "B" => Some(suite.clone()),
                 _ => None,
@@ -689,6 +700,73 @@ fn a_single_scenario_the_draw_blocks_is_a_warning_with_the_order_hand_written_de
             assert!(w.to_string().starts_with("in scenario `s"), "{w}");
         }
     }
+}
+
+/// W003 for a `demos` block's draws (the repository's sauce row: `train`
+/// could not replay demonstrations 12 and 46, the mustard picked while
+/// the chili drawn beside it stood, and `check` was silent). Each
+/// demonstration's own sequence says what stands: A picked first leaves
+/// B standing. The warning names, by the numbers `train` gives them
+/// (among all the file's demonstrations, from 1: the hand-written one
+/// first), exactly the demonstrations where the draw brings B nearer
+/// than the workspace allows while A is picked.
+#[test]
+fn a_demonstration_the_draw_blocks_is_a_warning_numbered_as_train_numbers_it() {
+    let loader = MemoryLoader::new().with(
+        "main.pack",
+        format!(
+            "{CELL}\norder o for stock5 {{\n A -> g1\n C -> g2\n}}\ndemo seen for o {{\n sequence A, C\n}}\n\
+             demos t for stock5 {{\n choose 2 of A, B into g1, g2, g3\n sequence ascending\n jitter 5 mm\n repeat 5\n seed 4\n}}\n"
+        ),
+    );
+    let c = match check(&loader, &[PathBuf::from("main.pack")], &Near) {
+        Ok(c) => c,
+        Err(f) => panic!("{:#?}", f.errors),
+    };
+    let demos = c.demonstrations().expect("demonstrations");
+    assert_eq!(demos.len(), 1 + 6 * 5);
+    let (a, b) = (0, 1);
+    let expected: Vec<String> = demos
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| {
+            let place = |e: usize| d.sequence.iter().position(|&x| x == e);
+            let b_stands = match (place(a), place(b)) {
+                (Some(pa), Some(pb)) => pa < pb,
+                _ => false,
+            };
+            b_stands && (d.setup.positions[b][0] - d.setup.positions[a][0]).abs() < NEAR
+        })
+        .map(|(i, _)| (i + 1).to_string())
+        .collect();
+    assert!(!expected.is_empty() && expected.len() < 30, "{expected:?}");
+    let named: Vec<&Vec<String>> = c
+        .warnings
+        .iter()
+        .filter_map(|w| match w {
+            Warning::DrawnPickBlocked {
+                product,
+                by,
+                cases,
+                draws: Draws::Demonstrations,
+                ..
+            } if product == "A" && by == "B" => Some(cases),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(named, vec![&expected], "{:#?}", c.warnings);
+    let w = c
+        .warnings
+        .iter()
+        .find(|w| w.code() == "W003")
+        .expect("W003");
+    assert!(
+        w.to_string().starts_with(&format!(
+            "in {} of 30 demonstrations of `t` (",
+            expected.len()
+        )),
+        "{w}"
+    );
 }
 
 /// A workspace that lets every product go `DEEP` above the floor in slot
