@@ -99,8 +99,8 @@ fn drawn<'a>(m: &'a Model, x: &'a Expanded) -> Vec<Drawn<'a>> {
 
 /// The `demos` blocks with a jitter, each with its demonstrations as
 /// cases (numbered among all the file's demonstrations from 1, as
-/// `train` names one it cannot replay) and their sequences. A block whose demonstrations cannot be generated is left
-/// out (expansion reported why).
+/// `train` names one it cannot replay) and their sequences. None where
+/// a demonstration cannot be generated (expansion reported why).
 fn demonstrated<'a>(m: &'a Model, x: &'a Expanded) -> Vec<Drawn<'a>> {
     let jittered: Vec<(usize, &DemosDef, usize)> = x
         .blocks
@@ -314,7 +314,11 @@ fn packed_before(m: &Model, i: usize, j: usize, k: usize) -> Option<bool> {
 /// the pick of `k`, at its drawn place, is blocked by it.
 fn blocked_in(m: &Model, s: &Drawn, k: usize, ws: &dyn Workspace) -> Vec<Warning> {
     let inv = &m.inventories[s.inventory];
-    let before = |j: usize| packed_before(m, s.inventory, j, k);
+    // The file's order for each other entry, the same in every case.
+    let declared: Vec<Option<bool>> = (0..inv.entries.len())
+        .map(|j| packed_before(m, s.inventory, j, k))
+        .collect();
+    let before = |j: usize| declared.get(j).copied().flatten();
     let mut by_other: BTreeMap<usize, Vec<String>> = BTreeMap::new();
     for (c, case) in s.cases.iter().enumerate() {
         let setup = &case.setup;

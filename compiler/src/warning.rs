@@ -312,6 +312,21 @@ pub enum Draws {
     Demonstrations,
 }
 
+/// What fails in a drawn warning's cases, for its help: scenarios with
+/// every planner (surely, where the pick is out of reach; else they
+/// can), or demonstrations that the expert cannot replay.
+fn who_fails(draws: Draws, surely: bool) -> &'static str {
+    match (draws, surely) {
+        (Draws::Scenario, false) => "this scenario can fail with every planner",
+        (Draws::Scenarios, false) => "these scenarios can fail with every planner",
+        (Draws::Scenario, true) => "this scenario fails with every planner",
+        (Draws::Scenarios, true) => "these scenarios fail with every planner",
+        (Draws::Demonstrations, _) => {
+            "the expert cannot replay these demonstrations, and `train` stops at the first"
+        }
+    }
+}
+
 /// Which cases a drawn warning is about: "in scenario `x`" for a single
 /// `scenario`, else "in 2 of 10 scenarios of `suite` (03, 07)" or "in 1
 /// of 24 demonstrations of `teach` (05)".
@@ -547,15 +562,9 @@ impl Warning {
                 draws,
                 ..
             } => {
-                let fail = match draws {
-                    Draws::Scenario => "this scenario can fail with every planner",
-                    Draws::Scenarios => "these scenarios can fail with every planner",
-                    Draws::Demonstrations => {
-                        "the expert cannot replay these demonstrations, and `train` stops at the first"
-                    }
-                };
                 format!(
-                    "{fail}: move `{product}` and `{by}` further apart, or lower the jitter"
+                    "{}: move `{product}` and `{by}` further apart, or lower the jitter",
+                    who_fails(*draws, false)
                 )
             }
             Warning::DrawnOutOfReach {
@@ -573,14 +582,10 @@ impl Warning {
                     ),
                     None => format!("move `{product}` where the arm reaches round it"),
                 };
-                let fail = match draws {
-                    Draws::Scenario => "this scenario fails with every planner",
-                    Draws::Scenarios => "these scenarios fail with every planner",
-                    Draws::Demonstrations => {
-                        "the expert cannot replay these demonstrations, and `train` stops at the first"
-                    }
-                };
-                format!("{fail}: {way} by the jitter, or lower the jitter")
+                format!(
+                    "{}: {way} by the jitter, or lower the jitter",
+                    who_fails(*draws, true)
+                )
             }
             Warning::TooClose { gap_mm, .. } => format!(
                 "the one packed second cannot be lowered past the other: it is let go above the other's top and can land on it; move the slots at least {:.1} mm further apart",

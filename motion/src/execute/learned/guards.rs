@@ -240,11 +240,26 @@ pub(super) fn other_shapes(
     if arm.ur_branch(base, start) == Some(own) {
         return Vec::new();
     }
+    in_other_branches(arm, base, &arm.flange_pose(base, end), start, own, start)
+}
+
+/// Flange pose `pose`'s joints on every inverse-kinematics branch but
+/// `except` (each joint at the whole turn nearest `near`), with room to
+/// the base's and wrist 3's limits from `start` ([`with_room`]), nearest
+/// `start` first.
+pub(super) fn in_other_branches(
+    arm: &Arm,
+    base: &Isometry3<f64>,
+    pose: &Isometry3<f64>,
+    near: &Joints,
+    except: usize,
+    start: &Joints,
+) -> Vec<Joints> {
     let mut others: Vec<Joints> = arm
-        .ur_ik_branches(base, &arm.flange_pose(base, end), start)
+        .ur_ik_branches(base, pose, near)
         .into_iter()
         .enumerate()
-        .filter(|&(b, _)| b != own)
+        .filter(|&(b, _)| b != except)
         .filter_map(|(_, q)| q)
         .map(|q| with_room(arm, start, q))
         .collect();

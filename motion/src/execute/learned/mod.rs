@@ -29,7 +29,8 @@ use crate::collision::Held;
 use crate::expert::{self, SubGoal, Suction, schedule};
 use guards::{
     COLLIDING_RELEASE_RAISE, Inside, KEEP_INSIDE, MAX_ABOVE_RIM, descent_vias, held_at_limits,
-    level_vias, nearer_middle, other_shapes, release_collides, shorter_turn, swing_via, with_room,
+    in_other_branches, level_vias, nearer_middle, other_shapes, release_collides, shorter_turn,
+    swing_via, with_room,
 };
 use nalgebra::Vector3;
 use packwright_interface::outcome::{
@@ -439,20 +440,13 @@ impl<W: World> Learned<'_, W> {
             && let Some(reached) = arm.into_limits(&held_at_limits(arm, &start, last), &start)
         {
             let pose = arm.flange_pose(base, &reached);
-            let mut more: Vec<(Joints, Joints)> = arm
-                .ur_ik_branches(base, &pose, &reached)
-                .into_iter()
-                .enumerate()
-                .filter(|&(b, _)| b != own)
-                .filter_map(|(_, end)| end)
-                .map(|end| with_room(arm, &start, end))
-                .filter(|end| s.checker.check(end, load.held, load.ignore).is_none())
-                .filter(|end| ends.iter().all(|(_, e)| e != end))
-                .map(|end| (end, end))
-                .collect();
-            more.sort_by(|a, b| {
-                joint_distance(&a.1, &start).total_cmp(&joint_distance(&b.1, &start))
-            });
+            let more: Vec<(Joints, Joints)> =
+                in_other_branches(arm, base, &pose, &reached, own, &start)
+                    .into_iter()
+                    .filter(|end| s.checker.check(end, load.held, load.ignore).is_none())
+                    .filter(|end| ends.iter().all(|(_, e)| e != end))
+                    .map(|end| (end, end))
+                    .collect();
             ends.extend(more);
         }
         let mut tried = |from: Joints, end: Joints| {
