@@ -157,6 +157,23 @@ fn a_model_taught_three_hand_written_demonstrations_keeps_its_rule_on_larger_ord
         "{listed}"
     );
     assert!(place("tin") < place("soap"), "{listed}");
+    // The demonstrations never show jar or card with the other four:
+    // those 8 pairs are named as ordered by the inventory, not taught.
+    let guessed = report["warnings"]
+        .as_array()
+        .and_then(|w| w.iter().find(|w| w["kind"] == "list_guessed"))
+        .unwrap_or_else(|| panic!("a list_guessed warning: {report}"));
+    assert_eq!(
+        (&guessed["ordered"], &guessed["pairs"]),
+        (&7.into(), &15.into()),
+        "{guessed}"
+    );
+    let untaught = guessed["untaught"].as_array().expect("untaught pairs");
+    assert_eq!(untaught.len(), 8, "{guessed}");
+    assert!(
+        untaught.contains(&serde_json::json!(["jar", "mug"])),
+        "{guessed}"
+    );
 
     let out = packwright(&[
         "eval",

@@ -55,6 +55,10 @@ pub struct Lesson {
     /// Other rules the demonstrations follow as well, when they show few
     /// pairs of products in order ([`Inferred::rivals`]).
     pub rivals: Vec<SequenceRule>,
+    /// The pairs of products a priority list read from the
+    /// demonstrations orders as the inventory lists them
+    /// ([`Inferred::guessed`]).
+    pub guessed: Guessed,
 }
 
 /// The expert's replays of a lesson's demonstrations.
@@ -198,11 +202,13 @@ impl Lesson {
             rule: sequence,
             exceptions,
             rivals,
+            guessed,
         } = if ordered.is_empty() {
             Inferred {
                 rule: SequenceRule::Ascending,
                 exceptions: Vec::new(),
                 rivals: Vec::new(),
+                guessed: Guessed::default(),
             }
         } else {
             let shown: Vec<DemonstrationRecord> =
@@ -255,6 +261,7 @@ impl Lesson {
                             rule,
                             exceptions: Vec::new(),
                             rivals: Vec::new(),
+                            guessed: Guessed::default(),
                         },
                         true,
                     )
@@ -295,6 +302,11 @@ impl Lesson {
                 } else {
                     Vec::new()
                 },
+                guessed: if cells.len() == 1 {
+                    inferred.guessed
+                } else {
+                    Guessed::default()
+                },
             }
         };
         for &k in &any_order {
@@ -314,6 +326,7 @@ impl Lesson {
             cell_rules,
             read_otherwise,
             rivals,
+            guessed,
         })
     }
 
@@ -595,6 +608,25 @@ pub struct Inferred {
     /// hand-written demonstration of two products taught `descending`
     /// where the line packs by a priority list that put those two so).
     pub rivals: Vec<SequenceRule>,
+    /// A priority list read from the demonstrations (none declared):
+    /// the pairs of products it orders that no demonstration orders,
+    /// directly or through others. The list orders them as the inventory
+    /// lists them where the taught pairs allow: a guess, not something
+    /// taught.
+    pub guessed: Guessed,
+}
+
+/// What a priority list read from demonstrations leaves to the inventory.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Guessed {
+    /// Pairs of the list's products the demonstrations order, directly or
+    /// through others.
+    pub ordered: usize,
+    /// Pairs of the list's products in all.
+    pub pairs: usize,
+    /// The pairs they do not order, each as the list has it (first
+    /// before second), in the list's order.
+    pub untaught: Vec<(String, String)>,
 }
 
 /// Fewer pairs of products shown in order than this, and a rule read
@@ -713,6 +745,36 @@ pub fn rule_warnings(compiled: &Compiled) -> Vec<Warning> {
             })
         })
         .collect()
+}
+
+/// The pairs of `list` that `before` (a pair shown in that order by the
+/// demonstrations' majority) orders neither way, directly or through
+/// other products.
+fn guessed(list: &[String], before: impl Fn(&str, &str) -> bool) -> Guessed {
+    let n = list.len();
+    let mut reach: Vec<Vec<bool>> = (0..n)
+        .map(|i| (0..n).map(|j| before(&list[i], &list[j])).collect())
+        .collect();
+    for k in 0..n {
+        let through = reach[k].clone();
+        for row in reach.iter_mut().filter(|row| row[k]) {
+            for (r, &t) in row.iter_mut().zip(&through) {
+                *r |= t;
+            }
+        }
+    }
+    let mut out = Guessed::default();
+    for i in 0..n {
+        for j in i + 1..n {
+            out.pairs += 1;
+            if reach[i][j] || reach[j][i] {
+                out.ordered += 1;
+            } else {
+                out.untaught.push((list[i].clone(), list[j].clone()));
+            }
+        }
+    }
+    out
 }
 
 /// Whether `sequence` (product names) follows `rule` in `inventory`
@@ -849,6 +911,7 @@ pub fn sequence_rule(
                 rule,
                 exceptions,
                 rivals: Vec::new(),
+                guessed: Guessed::default(),
             });
         }
     }
@@ -869,13 +932,20 @@ pub fn sequence_rule(
                 rule: SequenceRule::Ascending,
                 exceptions: Vec::new(),
                 rivals: Vec::new(),
+                guessed: Guessed::default(),
             },
             |(rule, exceptions)| Inferred {
                 rule: rule.clone(),
                 exceptions: exceptions.clone(),
                 rivals: Vec::new(),
+                guessed: Guessed::default(),
             },
         );
+    if declared.is_empty()
+        && let SequenceRule::Listed(list) = &best.rule
+    {
+        best.guessed = guessed(list, after);
+    }
     // The pairs of products the demonstrations put in an order.
     let pairs: BTreeSet<(&str, &str)> = votes
         .keys()
@@ -1179,6 +1249,85 @@ demo o1_seen for o1 { sequence p3, p2, p1 }";
         let inferred = rule_of(declared).ok().flatten().expect("a rule");
         assert_eq!(inferred.rule, SequenceRule::Descending);
         assert!(inferred.rivals.is_empty(), "{:?}", inferred.rivals);
+    }
+
+    /// A priority list read from hand-written demonstrations (helper V:
+    /// one demonstration of p3, p1, p6 where the line packs by another
+    /// list) orders the products no demonstration shows together by
+    /// the inventory's order: those pairs are named, not passed off as
+    /// taught. A pair ordered through a third product is taught.
+    #[test]
+    fn a_priority_list_read_from_demonstrations_names_the_pairs_it_guesses() {
+        let pairs = |list: &[(&str, &str)]| -> Vec<(String, String)> {
+            list.iter()
+                .map(|&(a, b)| (a.to_owned(), b.to_owned()))
+                .collect()
+        };
+        let one = "order o1 for inv { p3 -> s1
+  p1 -> s2
+  p6 -> s3 }
+demo o1_seen for o1 { sequence p3, p1, p6 }";
+        let inferred = rule_of(one).ok().flatten().expect("a rule");
+        let SequenceRule::Listed(list) = &inferred.rule else {
+            panic!("{:?}", inferred.rule)
+        };
+        assert_eq!(list, &["p2", "p3", "p1", "p4", "p5", "p6"]);
+        assert_eq!((inferred.guessed.ordered, inferred.guessed.pairs), (3, 15));
+        assert_eq!(inferred.guessed.untaught.len(), 12);
+        assert_eq!(
+            inferred.guessed.untaught[..6],
+            pairs(&[
+                ("p2", "p3"),
+                ("p2", "p1"),
+                ("p2", "p4"),
+                ("p2", "p5"),
+                ("p2", "p6"),
+                ("p3", "p4")
+            ])
+        );
+        for taught in [("p3", "p1"), ("p1", "p6"), ("p3", "p6")] {
+            assert!(!inferred.guessed.untaught.contains(&pairs(&[taught])[0]));
+        }
+        // p2 before p1 and p1 before p3 in two demonstrations: p2 before
+        // p3 is taught through p1.
+        let chained = "order o1 for inv { p2 -> s1
+  p1 -> s2 }
+demo o1_seen for o1 { sequence p2, p1 }
+order o2 for inv { p1 -> s1
+  p3 -> s2 }
+demo o2_seen for o2 { sequence p1, p3 }";
+        let inferred = rule_of(chained).ok().flatten().expect("a rule");
+        assert_eq!(inferred.guessed.ordered, 3);
+        assert!(
+            inferred
+                .guessed
+                .untaught
+                .iter()
+                .all(|(a, b)| ![a.as_str(), b.as_str()]
+                    .iter()
+                    .all(|n| ["p1", "p2", "p3"].contains(n))),
+            "{:?}",
+            inferred.guessed
+        );
+        // A direction, or a declared list, guesses nothing.
+        let three = "order o1 for inv { p3 -> s1
+  p2 -> s2
+  p1 -> s3 }
+demo o1_seen for o1 { sequence p3, p2, p1 }";
+        let inferred = rule_of(three).ok().flatten().expect("a rule");
+        assert_eq!(inferred.guessed, Guessed::default());
+        let declared = "demos d for inv {
+  choose 2 of p4, p2 into s1, s2
+  sequence listed
+  seed 1
+}";
+        let inferred = rule_of(declared).ok().flatten().expect("a rule");
+        assert!(
+            matches!(inferred.rule, SequenceRule::Listed(_)),
+            "{:?}",
+            inferred.rule
+        );
+        assert_eq!(inferred.guessed, Guessed::default());
     }
 
     /// A generated block declares `sequence descending`, and one

@@ -52,6 +52,19 @@ pub const MIN_REASONER_ACCURACY: f64 = 0.99;
 /// Held-out mean sub-goal error (m) above which `train` warns.
 pub const MAX_SUBGOAL_ERROR: f64 = 0.010;
 
+/// How many products' guessed pairs `train`'s message names (each with
+/// the products the list puts after it).
+const GROUPS_SHOWN: usize = 3;
+
+/// "a", "a and b", "a, b and c".
+fn and_list(items: &[&str]) -> String {
+    match items {
+        [] => String::new(),
+        [one] => (*one).to_owned(),
+        [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+    }
+}
+
 /// A weakness of a trained model that `train` reports.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -97,6 +110,18 @@ pub enum Weakness {
     RuleFromFewPairs {
         taught: packwright_interface::SequenceRule,
         rivals: Vec<packwright_interface::SequenceRule>,
+    },
+    /// A priority list read from demonstrations (none declared) that
+    /// order only some of its pairs of products: the others stand in it
+    /// as the inventory lists them ([`packwright_pipeline::teach::Guessed`]).
+    ListGuessed {
+        taught: packwright_interface::SequenceRule,
+        /// Pairs the demonstrations order, directly or through others.
+        ordered: usize,
+        /// Pairs of the list's products in all.
+        pairs: usize,
+        /// The pairs ordered so (first before second).
+        untaught: Vec<(String, String)>,
     },
     /// Demonstrations that break the taught sequence rule (their
     /// decisions were left out of the reasoner's examples).
@@ -161,6 +186,38 @@ impl std::fmt::Display for Weakness {
                     .collect::<Vec<_>>()
                     .join("; ")
             ),
+            Weakness::ListGuessed {
+                taught,
+                ordered,
+                pairs,
+                untaught,
+            } => {
+                // Grouped by the product first: "a before b, c and d".
+                let mut groups: Vec<(&str, Vec<&str>)> = Vec::new();
+                for (a, b) in untaught {
+                    match groups.last_mut() {
+                        Some((first, seconds)) if first == a => seconds.push(b),
+                        _ => groups.push((a, vec![b])),
+                    }
+                }
+                let shown: Vec<String> = groups
+                    .iter()
+                    .take(GROUPS_SHOWN)
+                    .map(|(a, seconds)| format!("{a} before {}", and_list(seconds)))
+                    .collect();
+                let more: usize = groups.iter().skip(GROUPS_SHOWN).map(|g| g.1.len()).sum();
+                write!(
+                    f,
+                    "the demonstrations order {ordered} of the {pairs} pairs of products in the priority list the model keeps ({taught}); the model orders the other {} as the inventory lists them, where the taught pairs allow, and no demonstration showed them: {}{}. If the line packs them otherwise, show those products together in a demonstration, or declare the whole list in a `demos` block (`sequence listed`, the `choose` list in priority order)",
+                    untaught.len(),
+                    shown.join("; "),
+                    if more > 0 {
+                        format!("; and {more} more pair{}", if more == 1 { "" } else { "s" })
+                    } else {
+                        String::new()
+                    }
+                )
+            }
             Weakness::SequenceExceptions {
                 exceptions,
                 demonstrations,
@@ -300,10 +357,18 @@ pub fn run(
             taught: lesson.sequence.clone(),
         });
     }
+    // A list read from few pairs is said once, with its rivals.
     if !lesson.rivals.is_empty() {
         warnings.push(Weakness::RuleFromFewPairs {
             taught: lesson.sequence.clone(),
             rivals: lesson.rivals.clone(),
+        });
+    } else if !lesson.guessed.untaught.is_empty() {
+        warnings.push(Weakness::ListGuessed {
+            taught: lesson.sequence.clone(),
+            ordered: lesson.guessed.ordered,
+            pairs: lesson.guessed.pairs,
+            untaught: lesson.guessed.untaught.clone(),
         });
     }
     if let Some(&first) = lesson.exceptions.first() {
@@ -457,6 +522,41 @@ mod tests {
             found[0]
                 .to_string()
                 .starts_with("held-out reasoner accuracy")
+        );
+    }
+
+    /// A guessed priority list's message groups the pairs by the product
+    /// first and names how many it leaves out.
+    #[test]
+    fn a_guessed_list_says_which_pairs_stand_by_inventory_position() {
+        let list = |names: &[&str]| {
+            packwright_interface::SequenceRule::Listed(
+                names.iter().map(|n| (*n).to_owned()).collect(),
+            )
+        };
+        let pair = |a: &str, b: &str| (a.to_owned(), b.to_owned());
+        let w = Weakness::ListGuessed {
+            taught: list(&["a", "b", "c", "d", "e", "f"]),
+            ordered: 9,
+            pairs: 15,
+            untaught: vec![
+                pair("a", "b"),
+                pair("a", "c"),
+                pair("b", "d"),
+                pair("c", "d"),
+                pair("c", "e"),
+                pair("d", "f"),
+            ],
+        };
+        let text = w.to_string();
+        assert!(text.contains("order 9 of the 15 pairs"), "{text}");
+        assert!(
+            text.contains("the other 6 as the inventory lists them"),
+            "{text}"
+        );
+        assert!(
+            text.contains(": a before b and c; b before d; c before d and e; and 1 more pair."),
+            "{text}"
         );
     }
 }
