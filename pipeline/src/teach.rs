@@ -1146,6 +1146,28 @@ pub(crate) mod tests {
         assert_eq!(with_skipped_swapped(&g, None), None);
     }
 
+    /// Hand-written demonstrations of [`rule_cell`], one per sequence
+    /// (an order `oK` of its products into s1, s2, ... and the demo
+    /// `oK_seen` in that sequence).
+    fn by_hand(sequences: &[&[&str]]) -> String {
+        sequences
+            .iter()
+            .enumerate()
+            .map(|(k, sequence)| {
+                let lines: Vec<String> = sequence
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| format!("{p} -> s{}", i + 1))
+                    .collect();
+                format!(
+                    "order o{k} for inv {{ {} }}\ndemo o{k}_seen for o{k} {{ sequence {} }}\n",
+                    lines.join("\n  "),
+                    sequence.join(", ")
+                )
+            })
+            .collect()
+    }
+
     /// The rule of cell `c` in [`rule_cell`] with `tail`.
     fn rule_of(tail: &str) -> Result<Option<Inferred>> {
         cell_rule(&rule_cell(tail), "c")
@@ -1197,12 +1219,10 @@ inventory inv for c {{
         let list = |names: [&str; 6]| SequenceRule::Listed(names.map(String::from).to_vec());
         // One demonstration handling `a` then `b`.
         let pair = |a: &str, b: &str| {
-            let text = format!(
-                "order o1 for inv {{ {a} -> s1
-  {b} -> s2 }}
-demo o1_seen for o1 {{ sequence {a}, {b} }}"
-            );
-            rule_of(&text).ok().flatten().expect("a rule")
+            rule_of(&by_hand(&[&[a, b]]))
+                .ok()
+                .flatten()
+                .expect("a rule")
         };
         let inferred = pair("p3", "p2");
         assert_eq!(inferred.rule, SequenceRule::Descending);
@@ -1222,23 +1242,15 @@ demo o1_seen for o1 {{ sequence {a}, {b} }}"
         // A priority list read from two pairs (p2 before p1 and p3, which
         // neither direction follows): so does the list with the other
         // products the other way round.
-        let first = "order o1 for inv { p2 -> s1
-  p1 -> s2 }
-demo o1_seen for o1 { sequence p2, p1 }
-order o2 for inv { p2 -> s1
-  p3 -> s2 }
-demo o2_seen for o2 { sequence p2, p3 }";
-        let inferred = rule_of(first).ok().flatten().expect("a rule");
+        let first = by_hand(&[&["p2", "p1"], &["p2", "p3"]]);
+        let inferred = rule_of(&first).ok().flatten().expect("a rule");
         assert_eq!(inferred.rule, list(["p2", "p1", "p3", "p4", "p5", "p6"]));
         assert_eq!(
             inferred.rivals,
             [list(["p6", "p5", "p4", "p2", "p3", "p1"])]
         );
-        let three = "order o1 for inv { p3 -> s1
-  p2 -> s2
-  p1 -> s3 }
-demo o1_seen for o1 { sequence p3, p2, p1 }";
-        let inferred = rule_of(three).ok().flatten().expect("a rule");
+        let three = by_hand(&[&["p3", "p2", "p1"]]);
+        let inferred = rule_of(&three).ok().flatten().expect("a rule");
         assert_eq!(inferred.rule, SequenceRule::Descending);
         assert!(inferred.rivals.is_empty(), "{:?}", inferred.rivals);
         let declared = "demos d for inv {
@@ -1263,11 +1275,8 @@ demo o1_seen for o1 { sequence p3, p2, p1 }";
                 .map(|&(a, b)| (a.to_owned(), b.to_owned()))
                 .collect()
         };
-        let one = "order o1 for inv { p3 -> s1
-  p1 -> s2
-  p6 -> s3 }
-demo o1_seen for o1 { sequence p3, p1, p6 }";
-        let inferred = rule_of(one).ok().flatten().expect("a rule");
+        let one = by_hand(&[&["p3", "p1", "p6"]]);
+        let inferred = rule_of(&one).ok().flatten().expect("a rule");
         let SequenceRule::Listed(list) = &inferred.rule else {
             panic!("{:?}", inferred.rule)
         };
@@ -1290,13 +1299,8 @@ demo o1_seen for o1 { sequence p3, p1, p6 }";
         }
         // p2 before p1 and p1 before p3 in two demonstrations: p2 before
         // p3 is taught through p1.
-        let chained = "order o1 for inv { p2 -> s1
-  p1 -> s2 }
-demo o1_seen for o1 { sequence p2, p1 }
-order o2 for inv { p1 -> s1
-  p3 -> s2 }
-demo o2_seen for o2 { sequence p1, p3 }";
-        let inferred = rule_of(chained).ok().flatten().expect("a rule");
+        let chained = by_hand(&[&["p2", "p1"], &["p1", "p3"]]);
+        let inferred = rule_of(&chained).ok().flatten().expect("a rule");
         assert_eq!(inferred.guessed.ordered, 3);
         assert!(
             inferred
@@ -1310,11 +1314,8 @@ demo o2_seen for o2 { sequence p1, p3 }";
             inferred.guessed
         );
         // A direction, or a declared list, guesses nothing.
-        let three = "order o1 for inv { p3 -> s1
-  p2 -> s2
-  p1 -> s3 }
-demo o1_seen for o1 { sequence p3, p2, p1 }";
-        let inferred = rule_of(three).ok().flatten().expect("a rule");
+        let three = by_hand(&[&["p3", "p2", "p1"]]);
+        let inferred = rule_of(&three).ok().flatten().expect("a rule");
         assert_eq!(inferred.guessed, Guessed::default());
         let declared = "demos d for inv {
   choose 2 of p4, p2 into s1, s2
