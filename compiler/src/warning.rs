@@ -415,6 +415,14 @@ impl Warning {
     pub fn label(&self) -> String {
         match self {
             Warning::PickBlocked {
+                pose: Pose::HoverFromStart,
+                ..
+            } => "the arm's every way to it from the start pose meets a product standing".into(),
+            Warning::PickBlocked {
+                pose: Pose::HoverFromBox,
+                ..
+            } => "the arm's every way to it from over the box meets a product standing".into(),
+            Warning::PickBlocked {
                 where_written: false,
                 jitter_mm,
                 ..

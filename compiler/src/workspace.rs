@@ -40,6 +40,12 @@ pub enum Pose {
     Start,
     /// Above the product, before the descent.
     Hover,
+    /// The hover reached from the start pose: the motion there, not the
+    /// pose.
+    HoverFromStart,
+    /// The hover reached from over the box (where the arm is once it has
+    /// let the product before go): the motion there, not the pose.
+    HoverFromBox,
     /// The cup on the product's top face (suction on).
     TopFace,
     /// The product lifted by the cell's `lift`.
@@ -58,7 +64,10 @@ impl Pose {
     /// only, not on the slot).
     pub fn is_picking(self) -> bool {
         // (The start is not: it is the cell's.)
-        matches!(self, Pose::Hover | Pose::TopFace | Pose::Lift)
+        matches!(
+            self,
+            Pose::Hover | Pose::HoverFromStart | Pose::HoverFromBox | Pose::TopFace | Pose::Lift
+        )
     }
 }
 
@@ -67,6 +76,8 @@ impl fmt::Display for Pose {
         f.write_str(match self {
             Pose::Start => "its start pose over the middle of the pending area",
             Pose::Hover => "the hover above the product",
+            Pose::HoverFromStart => "the hover above the product from the start pose",
+            Pose::HoverFromBox => "the hover above the product from over the box",
             Pose::TopFace => "the product's top face",
             Pose::Lift => "the lift",
             Pose::Approach => "the approach point",
@@ -209,6 +220,24 @@ pub trait Workspace {
     /// `standing` products (not it) where they stand: the first pose they
     /// block, if any. Without an answer (the default), nothing is blocked.
     fn pick_among(
+        &self,
+        _m: &Model,
+        _cell: usize,
+        _product: usize,
+        _at: [f64; 2],
+        _standing: &[Standing],
+    ) -> Option<Blocked> {
+        None
+    }
+
+    /// The motion to the hover of `product` at `at` (whose poses the
+    /// `standing` products leave free) from the start pose or from over
+    /// the box, which the empty cell allows: blocked by them
+    /// ([`Pose::HoverFromStart`], [`Pose::HoverFromBox`]) with the product
+    /// met, if it is. Asked of an inventory's places only (a search where
+    /// they block it; not of each drawn case). Without an answer (the
+    /// default), nothing is blocked.
+    fn pick_way_among(
         &self,
         _m: &Model,
         _cell: usize,
@@ -705,7 +734,12 @@ fn standing(
         }
         // The others, with their entries' indices.
         let (others, index) = stand.others(k, jitter);
-        if let Some(b) = ws.pick_among(m, inv.cell, e.product, e.at, &others) {
+        // The poses, then the way to the first.
+        let blocked = |standing: &[Standing]| {
+            ws.pick_among(m, inv.cell, e.product, e.at, standing)
+                .or_else(|| ws.pick_way_among(m, inv.cell, e.product, e.at, standing))
+        };
+        if let Some(b) = blocked(&others) {
             let met =
                 b.by.and_then(|b| index.get(b))
                     .map(|&j| (j, &inv.entries[j]));
@@ -715,8 +749,7 @@ fn standing(
             // where the jitter may draw them (asked again without it).
             let where_written = jitter <= 0.0 || {
                 let (written, _) = stand.others(k, 0.0);
-                ws.pick_among(m, inv.cell, e.product, e.at, &written)
-                    .is_some()
+                blocked(&written).is_some()
             };
             warnings.push(Warning::PickBlocked {
                 at: e.loc,

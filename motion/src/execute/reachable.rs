@@ -18,6 +18,7 @@ use super::station::{
 };
 use crate::collision::{Checker, Held, ProductBody};
 use crate::expert::{self, SubGoal};
+use crate::rrt::{self, Query, RrtConfig};
 use nalgebra::{Point3, Vector3};
 use packwright_interface::outcome::{Hit, Stage};
 use packwright_interface::scene::CellScene;
@@ -54,6 +55,17 @@ pub struct Release {
     /// Where the release is raised: what the arm or the held product
     /// meets at the release's own height.
     pub lower: Option<Hit>,
+}
+
+/// A slot from over which the arm finds no way to a pick's hover
+/// ([`Reachability::way_to_hover`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct NoWay {
+    /// The slot (an index into the cell's) the arm started over; `None`:
+    /// the start pose.
+    pub from: Option<usize>,
+    /// The standing product the straight motion meets, if it meets one.
+    pub by: Option<String>,
 }
 
 /// The reach of one arm in one cell.
@@ -214,6 +226,108 @@ impl Reachability {
             from = Some(reached);
         }
         Ok(())
+    }
+
+    /// Whether the arm, in its start pose or empty-handed over each slot
+    /// as it is once it has backed up from a release there (the point
+    /// above the slot, as the expert carries a product of `size` there),
+    /// still finds a way to the hover above that product standing at
+    /// `at` once the `standing` products stand too. Asked only from where
+    /// the empty cell has an easy way (straight to one of the hover's free
+    /// solutions, or swung there: the base turned alone first or last,
+    /// as `Station::route` tries before it searches); then the way among
+    /// them is that, else RRT-Connect with its usual budget to each of the
+    /// hover's free solutions, as `execute` searches. The first place it
+    /// finds none from; `None` also where the hover itself is not reached
+    /// ([`Reachability::picking`] tells that).
+    pub fn way_to_hover(
+        &self,
+        standing: &[ProductBody],
+        size: [f64; 3],
+        at: [f64; 2],
+    ) -> Option<NoWay> {
+        let goals = self.picking_goals(size, at);
+        let picked = ProductBody {
+            name: "held".to_owned(),
+            centre: [at[0], at[1], size[2] / 2.0],
+            size,
+            yaw: 0.0,
+        };
+        let among = self.among(standing);
+        let (empty, full) = (
+            self.checker.with_product(&picked),
+            among.checker.with_product(&picked),
+        );
+        let touching = Load::picking(&picked.name);
+        let hovers = self.step_on(&full, &goals[0], &[goals[0].tip[2]], None, touching);
+        if hovers.is_empty() {
+            return None;
+        }
+        // Straight or swung from `start` to `hover` with `checker`'s bodies.
+        let easy = |checker: &Checker, start: &Joints, hover: &Joints| {
+            let clear = |a: &Joints, b: &Joints| {
+                checker
+                    .check_motion(a, b, touching.held, touching.ignore)
+                    .is_none()
+            };
+            let turn = hover[0] - start[0];
+            let (mut first, mut last) = (*start, *hover);
+            (first[0], first[5]) = (hover[0], first[5] + turn);
+            (last[0], last[5]) = (start[0], last[5] - turn);
+            clear(start, hover)
+                || [first, last].iter().any(|via| {
+                    self.checker.arm().within_limits(via)
+                        && checker.check(via, touching.held, touching.ignore).is_none()
+                        && clear(start, via)
+                        && clear(via, hover)
+                })
+        };
+        let query = Query {
+            checker: &full,
+            limits: &self.checker.arm().limits,
+            held: touching.held,
+            ignore: touching.ignore,
+        };
+        // The point above each slot: the first solution free among the
+        // products, nearest the start pose's shape.
+        let above = |slot: usize, spec| {
+            let tip = expert::placing(
+                goals[2].tip,
+                expert::release_at(&self.cell, spec, size),
+                size[2],
+                expert::box_height(&self.cell, slot),
+                [self.cell.base[0], self.cell.base[1]],
+            )[1]
+            .tip;
+            solutions(&self.checker, Point3::from(tip), 0.0, &self.near)
+                .into_iter()
+                .find(|q| full.check(q, None, None).is_none())
+        };
+        let starts = std::iter::once((None, among.start)).chain(
+            self.cell
+                .slots
+                .iter()
+                .enumerate()
+                .map(|(slot, spec)| (Some(slot), above(slot, spec))),
+        );
+        starts.into_iter().find_map(|(from, start)| {
+            let start = start.filter(|q| full.check(q, None, None).is_none())?;
+            // A way only a search finds in the empty cell is not asked:
+            // what fails there is not the products' doing.
+            let eased = hovers.iter().find(|h| easy(&empty, &start, h))?;
+            if hovers.iter().any(|h| easy(&full, &start, h)) {
+                return None;
+            }
+            if hovers
+                .iter()
+                .any(|h| rrt::search(&query, start, *h, &RrtConfig::default()).is_some())
+            {
+                return None;
+            }
+            let by = product_hit(full.check_motion(&start, eased, touching.held, touching.ignore))
+                .filter(|name| *name != picked.name);
+            Some(NoWay { from, by })
+        })
     }
 
     /// The lift's free solutions, as [`Station::solve`](super::station::Station::solve)
