@@ -350,8 +350,8 @@ pub struct TrainArgs {
     /// (early stopping on the held-out split usually ends sooner); a
     /// network still improving at N goes on at the final rate until a
     /// shorter plateau, to 2N epochs at most ("best epoch 2/2" for
-    /// `--epochs 1`).
-    #[arg(long, value_name = "N")]
+    /// `--epochs 1`). At least 1.
+    #[arg(long, value_name = "N", value_parser = at_least_one)]
     pub epochs: Option<usize>,
     /// DAgger rounds for the dynamics policy (default 2; 0 learns from the
     /// demonstrations alone): the policy is rolled out from every
@@ -484,13 +484,18 @@ pub struct FmtArgs {
     pub stdout: bool,
 }
 
+/// The most cells one `generate` makes: all are made in memory before any
+/// is written (so that none replaces an edited file).
+pub const MAX_GENERATED: u64 = 10_000;
+
 #[derive(Debug, Args)]
 pub struct GenerateArgs {
     /// The first seed: the cell `gen_SEED`, written to DIR/gen_SEED.pack.
     #[arg(long, value_name = "SEED")]
     pub seed: u64,
-    /// How many cells: seeds SEED to SEED + COUNT - 1.
-    #[arg(long, value_name = "COUNT", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    /// How many cells: seeds SEED to SEED + COUNT - 1 (at most 10000 in
+    /// one run).
+    #[arg(long, value_name = "COUNT", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=MAX_GENERATED))]
     pub count: u64,
     /// The directory to write into (created if needed; a file of the same
     /// name is replaced only if it is what its seed generates: one edited

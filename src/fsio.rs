@@ -13,22 +13,39 @@ use std::sync::{Mutex, MutexGuard};
 /// an endless one such as `/dev/zero`) is refused after reading this much.
 pub const MAX_SOURCE_BYTES: u64 = 16 << 20;
 
+/// Every source file this process read (canonical paths): no output may
+/// replace one ([`write_file_atomically`]; `fmt` rewrites its own through
+/// [`rewrite_source_atomically`]).
+static READ: Mutex<std::collections::BTreeSet<PathBuf>> =
+    Mutex::new(std::collections::BTreeSet::new());
+
+/// The sources read so far ([`READ`]; a poisoned lock still holds them).
+fn sources_read() -> MutexGuard<'static, std::collections::BTreeSet<PathBuf>> {
+    READ.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 /// Reads a source file: at most [`MAX_SOURCE_BYTES`], UTF-8 text. The
 /// error says why for people ("no such file", "not UTF-8 text", "larger
-/// than 16 MiB").
+/// than 16 MiB"). The file is remembered as read ([`READ`]).
 pub fn read_source(path: &Path) -> Result<String, Unreadable> {
-    let other = |reason: &str| Unreadable::Other(reason.to_owned());
+    let text = read_source_text(path)?;
+    if let Ok(canonical) = fs::canonicalize(path) {
+        sources_read().insert(canonical);
+    }
+    Ok(text)
+}
+
+/// [`read_source`] without remembering the file.
+fn read_source_text(path: &Path) -> Result<String, Unreadable> {
     let describe = |e: std::io::Error| match e.kind() {
         ErrorKind::NotFound => Unreadable::Missing,
-        ErrorKind::InvalidData => other("not UTF-8 text"),
         _ => Unreadable::Other(e.to_string()),
     };
     if path.is_dir() {
-        return Err(other(if path.join("manifest.json").is_file() {
-            "a compiled directory, not a .pack file: give the .pack files it was compiled from (`train` and `show` read compiled directories)"
-        } else {
-            "a directory, not a .pack file"
-        }));
+        return Err(Unreadable::Directory {
+            compiled: path.join("manifest.json").is_file(),
+        });
     }
     let file = fs::File::open(path).map_err(describe)?;
     let mut bytes = Vec::new();
@@ -36,12 +53,11 @@ pub fn read_source(path: &Path) -> Result<String, Unreadable> {
         .read_to_end(&mut bytes)
         .map_err(describe)?;
     if bytes.len() as u64 > MAX_SOURCE_BYTES {
-        return Err(Unreadable::Other(format!(
-            "larger than {} MiB, the limit for a .pack file",
-            MAX_SOURCE_BYTES >> 20
-        )));
+        return Err(Unreadable::TooLarge {
+            limit_mib: MAX_SOURCE_BYTES >> 20,
+        });
     }
-    let text = String::from_utf8(bytes).map_err(|_| other("not UTF-8 text"))?;
+    let text = String::from_utf8(bytes).map_err(|e| Unreadable::not_text(e.as_bytes()))?;
     // A byte-order mark (some editors write one) is not part of the text.
     Ok(match text.strip_prefix('\u{feff}') {
         Some(rest) => rest.to_owned(),
@@ -63,9 +79,7 @@ impl Loader for FsLoader {
 
     fn read_named(&self, path: &Path) -> Result<String, Unreadable> {
         match fs::metadata(path) {
-            Ok(m) if !m.is_file() && !m.is_dir() => Err(Unreadable::Other(
-                "not a file on disk (a named pipe, a socket or a device): a file another one names must be a regular file".to_owned(),
-            )),
+            Ok(m) if !m.is_file() && !m.is_dir() => Err(Unreadable::NotAFile),
             _ => read_source(path),
         }
     }
@@ -201,6 +215,30 @@ fn sibling(path: &Path, tag: &str) -> PathBuf {
     parent.join(format!(".{name}.{tag}-{}", std::process::id()))
 }
 
+/// Makes the directory `path` goes in, when missing. One of its
+/// ancestors that is a file, not a directory, is named (the system says
+/// only "File exists").
+fn make_parent(path: &Path) -> anyhow::Result<()> {
+    let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) else {
+        return Ok(());
+    };
+    if parent.is_dir() {
+        return Ok(());
+    }
+    if let Some(file) = parent
+        .ancestors()
+        .find(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir())
+    {
+        bail!(
+            "{} is a file, not a directory: {} cannot be made under it",
+            file.display(),
+            path.display()
+        );
+    }
+    fs::create_dir_all(parent)
+        .with_context(|| format!("cannot create the directory {}", parent.display()))
+}
+
 fn write_synced(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let mut f =
         fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
@@ -217,6 +255,22 @@ fn write_synced(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 /// not a regular file (a device such as `/dev/null`, a pipe, a terminal)
 /// is written to as it is: renaming a file over it would destroy it.
 pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    // An output named as one of the sources read (`draw order.pack -o
+    // order.pack`, or a file it `use`s) would destroy it.
+    if let Ok(canonical) = fs::canonicalize(path)
+        && sources_read().contains(&canonical)
+    {
+        bail!(
+            "{} is a .pack file this command read: writing the output there would destroy it (nothing was written); choose another path",
+            path.display()
+        );
+    }
+    rewrite_source_atomically(path, bytes)
+}
+
+/// [`write_file_atomically`] even over a source read: `fmt`'s rewrite of
+/// the files it formats.
+pub fn rewrite_source_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     // What the path names in the end, as the kernel follows it: `/dev/stdout`
     // into a pipe is a link to a link (`/proc/self/fd/1`) whose target
     // (`pipe:[…]`) is no path to follow by hand.
@@ -237,7 +291,7 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
             };
             // A link to a link: followed again (the kernel refuses a loop).
             if fs::symlink_metadata(&followed).is_ok_and(|m| m.file_type().is_symlink()) {
-                return write_file_atomically(&followed, bytes);
+                return rewrite_source_atomically(&followed, bytes);
             }
             followed.as_path()
         }
@@ -253,16 +307,17 @@ pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let kept = existing.map(|m| m.permissions());
     // A missing parent directory is made, as `compile` makes its output
     // directory's.
-    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty())
-        && !parent.exists()
-    {
-        fs::create_dir_all(parent)
-            .with_context(|| format!("cannot create the directory {}", parent.display()))?;
-    }
+    make_parent(path)?;
     remove_stale_siblings(path);
     let tmp = sibling(path, "tmp");
     writing(&tmp);
     let replaced = write_synced(&tmp, bytes)
+        .with_context(|| {
+            format!(
+                "cannot write {} (through a temporary file beside it)",
+                path.display()
+            )
+        })
         .and_then(|()| match kept {
             Some(p) => fs::set_permissions(&tmp, p)
                 .with_context(|| format!("cannot set the permissions of {}", tmp.display())),
@@ -385,15 +440,30 @@ impl AtomicDir {
     /// (the file every such output has) and other files named in `names`
     /// ([`ensure_replaceable`]).
     pub fn begin(dir: &Path, marker: &str, names: &[&str]) -> anyhow::Result<AtomicDir> {
+        // A link to a directory: the directory is replaced and the link
+        // kept (renamed over, the link itself became a directory and its
+        // target kept the old output).
+        let followed;
+        let dir = match fs::symlink_metadata(dir) {
+            Ok(m) if m.file_type().is_symlink() && dir.is_dir() => {
+                followed = fs::canonicalize(dir)
+                    .with_context(|| format!("cannot follow the link {}", dir.display()))?;
+                followed.as_path()
+            }
+            _ => dir,
+        };
         check_replaceable(dir, marker, names)?;
-        if let Some(parent) = dir.parent().filter(|p| !p.as_os_str().is_empty()) {
-            fs::create_dir_all(parent)
-                .with_context(|| format!("cannot create {}", parent.display()))?;
-        }
+        make_parent(dir)?;
         remove_stale_siblings(dir);
         let tmp = sibling(dir, "tmp");
         let _ = fs::remove_dir_all(&tmp);
-        fs::create_dir(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+        fs::create_dir(&tmp).with_context(|| {
+            format!(
+                "cannot write {} (through a temporary directory beside it, {})",
+                dir.display(),
+                tmp.display()
+            )
+        })?;
         writing(&tmp);
         Ok(AtomicDir {
             dir: dir.to_owned(),
@@ -597,7 +667,7 @@ mod tests {
         );
         assert_eq!(
             read_source(&d).unwrap_err(),
-            Unreadable::Other("a directory, not a .pack file".into())
+            Unreadable::Directory { compiled: false }
         );
         fs::write(d.join("manifest.json"), "{}").expect("written");
         assert!(
@@ -696,6 +766,33 @@ mod tests {
             Some(manifest("newer").as_str())
         );
         assert!(!aside.exists() && !half_new.exists(), "no debris");
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// An output named through a link to a directory replaces the
+    /// directory and keeps the link (helper W: the link became a
+    /// directory, its target kept the old output).
+    #[test]
+    fn an_output_through_a_link_replaces_its_target_and_keeps_the_link() {
+        let dir = scratch("link");
+        let (real, link) = (dir.join("real"), dir.join("link"));
+        let write =
+            |run: &str| write_dir_atomically(&link, &[artifact(&manifest(run))], "manifest.json");
+        fs::create_dir_all(&real).expect("created");
+        fs::write(real.join("manifest.json"), manifest("old")).expect("written");
+        std::os::unix::fs::symlink("real", &link).expect("link");
+        write("new").expect("written through the link");
+        assert!(
+            fs::symlink_metadata(&link)
+                .expect("the link")
+                .file_type()
+                .is_symlink(),
+            "the link kept"
+        );
+        assert_eq!(
+            fs::read_to_string(real.join("manifest.json")).expect("read"),
+            manifest("new")
+        );
         let _ = fs::remove_dir_all(&dir);
     }
 }

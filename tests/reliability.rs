@@ -336,37 +336,45 @@ fn an_interrupted_compile_removes_what_it_was_writing_and_keeps_the_old_output()
     let made = packwright(&["compile", &old_file.display().to_string(), "-o", &out_s]);
     assert_eq!(made.status.code(), Some(0));
     let old = contents(&out);
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_packwright"))
-        .current_dir(common::root())
-        .args(["compile", &new_file.display().to_string(), "-o", &out_s])
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .expect("packwright starts");
-    let pid = child.id();
-    let tmp = dir.join(format!(".out.tmp-{pid}"));
-    let started = Instant::now();
-    while !tmp.exists()
-        && started.elapsed() < Duration::from_secs(60)
-        && child.try_wait().ok().flatten().is_none()
-    {
-        std::thread::sleep(Duration::from_micros(200));
+    // Ctrl-C, and a service manager's stop (helper W: SIGTERM left a
+    // 339 MB temporary behind).
+    for signal in ["-INT", "-TERM"] {
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_packwright"))
+            .current_dir(common::root())
+            .args(["compile", &new_file.display().to_string(), "-o", &out_s])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("packwright starts");
+        let pid = child.id();
+        let tmp = dir.join(format!(".out.tmp-{pid}"));
+        let started = Instant::now();
+        while !tmp.exists()
+            && started.elapsed() < Duration::from_secs(60)
+            && child.try_wait().ok().flatten().is_none()
+        {
+            std::thread::sleep(Duration::from_micros(200));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+        let sent = std::process::Command::new("kill")
+            .args([signal, &pid.to_string()])
+            .status()
+            .expect("kill runs");
+        assert!(sent.success());
+        let status = child.wait().expect("the run ends");
+        assert_eq!(
+            status.code(),
+            Some(130),
+            "interrupted while writing ({signal})"
+        );
+        assert!(!tmp.exists(), "{} left behind", tmp.display());
+        assert!(
+            siblings(&dir, "out").is_empty(),
+            "{:?}",
+            siblings(&dir, "out")
+        );
+        assert_eq!(contents(&out), old, "the old output intact");
     }
-    std::thread::sleep(Duration::from_millis(20));
-    let sent = std::process::Command::new("kill")
-        .args(["-INT", &pid.to_string()])
-        .status()
-        .expect("kill runs");
-    assert!(sent.success());
-    let status = child.wait().expect("the run ends");
-    assert_eq!(status.code(), Some(130), "interrupted while writing");
-    assert!(!tmp.exists(), "{} left behind", tmp.display());
-    assert!(
-        siblings(&dir, "out").is_empty(),
-        "{:?}",
-        siblings(&dir, "out")
-    );
-    assert_eq!(contents(&out), old, "the old output intact");
 }
 
 /// `train` killed at fixed points over its run: the model directory is
@@ -553,4 +561,100 @@ fn eval_prints_what_it_measured_before_writing_its_files() {
             .as_str()
             .is_some_and(|m| m.contains("nosuch"))
     );
+}
+
+/// Outputs never destroy inputs (helper W's probe): `draw -o` naming the
+/// file drawn, or a file it `use`s, wrote the picture over it (exit 0);
+/// compiling an empty file replaced an earlier dataset with nothing.
+/// Both are refused now, the files as they were.
+#[test]
+fn no_output_replaces_a_source_read_or_a_dataset_with_nothing() {
+    let dir = scratch("reliability", "inputs-kept");
+    let cell = dir.join("cell.pack");
+    let order = dir.join("order.pack");
+    fs::copy("orders/cells/line2.pack", &cell).expect("the cell copied");
+    let text = fs::read_to_string("orders/customers/pine_gifts.pack")
+        .expect("the order")
+        .replace("../cells/line2.pack", "cell.pack");
+    fs::write(&order, &text).expect("the order written");
+    let (order_s, cell_s) = (order.display().to_string(), cell.display().to_string());
+    let cell_text = fs::read(&cell).expect("the cell");
+    for out in [&order_s, &cell_s] {
+        let o = packwright(&["draw", &order_s, "-o", out]);
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains("would destroy it"),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    assert_eq!(fs::read_to_string(&order).expect("the order"), text);
+    assert_eq!(fs::read(&cell).expect("the cell"), cell_text);
+    // Elsewhere, the picture is written.
+    let svg = dir.join("order.svg").display().to_string();
+    let o = packwright(&["draw", &order_s, "-o", &svg]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+
+    let out = dir.join("compiled");
+    let o = packwright(&["compile", &order_s, "-o", &out.display().to_string()]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let before = contents(&out);
+    let empty = dir.join("empty.pack");
+    fs::write(&empty, "# nothing yet\n").expect("written");
+    let o = packwright(&[
+        "compile",
+        &empty.display().to_string(),
+        "-o",
+        &out.display().to_string(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("define nothing to compile"));
+    assert!(contents(&out) == before, "the dataset changed");
+}
+
+/// Counts that would make nothing or more than a run can hold are
+/// refused by the command line (exit 2): `generate --count` above
+/// 10,000 aborted allocating; `train --epochs 0` trained anyway.
+#[test]
+fn counts_out_of_range_are_refused() {
+    let dir = scratch("reliability", "counts");
+    let out = dir.join("gen").display().to_string();
+    for count in ["10001", "18446744073709551615"] {
+        let o = packwright(&["generate", "--seed", "1", "--count", count, "-o", &out]);
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    assert!(!dir.join("gen").exists(), "nothing made");
+    let o = packwright(&["train", "nowhere", "-o", &out, "--epochs", "0"]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--epochs"));
 }

@@ -279,7 +279,7 @@ mod tests {
             fn read(&self, path: &Path) -> Result<String, Unreadable> {
                 match path.to_str() {
                     Some("main.pack") => Ok("use \"big.pack\"\nuse \"gone.pack\"\n".into()),
-                    Some("big.pack") => Err(Unreadable::Other("larger than 16 MiB".into())),
+                    Some("big.pack") => Err(Unreadable::TooLarge { limit_mib: 16 }),
                     _ => Err(Unreadable::Missing),
                 }
             }

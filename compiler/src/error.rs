@@ -320,6 +320,11 @@ pub enum Error {
     Internal { what: String },
 }
 
+/// A place this many times farther than the limit it breaks (m, or
+/// m beyond a box) was most likely written in millimetres without the
+/// unit: the help says so.
+const MILLIMETRES_LIKELY: f64 = 10.0;
+
 impl Error {
     /// A stable code, documented in the README.
     pub fn code(&self) -> &'static str {
@@ -492,25 +497,19 @@ impl Error {
     /// How to fix it.
     pub fn help(&self) -> Option<String> {
         Some(match self {
-            Error::Read { .. } => "check the path and the file's permissions".into(),
+            Error::Read { reason, .. } => reason.help().into(),
             Error::Syntax { error, .. } => return error.help(),
             Error::UseMissing {
                 reason: Unreadable::Missing,
                 ..
             } => "`use` paths are relative to the file that uses them".into(),
-            Error::UseMissing {
-                reason: Unreadable::Other(_),
-                ..
-            } => "the file is there but cannot be used: make it a readable UTF-8 `.pack` file of at most 16 MiB".into(),
+            Error::UseMissing { reason, .. } => format!("the file is there but cannot be used: {}", reason.help()),
             Error::UseCycle { .. } => "remove one of the `use` lines; a file cannot use itself, even through others".into(),
             Error::RobotFileMissing {
                 reason: Unreadable::Missing,
                 ..
             } => "the path is relative to the file that names it".into(),
-            Error::RobotFileMissing {
-                reason: Unreadable::Other(_),
-                ..
-            } => "the file is there but cannot be read: make it a readable UTF-8 URDF file".into(),
+            Error::RobotFileMissing { .. } => "the file is there but cannot be read: make it a readable UTF-8 URDF file".into(),
             Error::RobotUnusable { .. } => "packwright drives one chain of six revolute joints from the root link to `tool0` (or `flange`); side branches bolted on by fixed joints are fine, collision meshes must be STL or OBJ files it can find".into(),
             Error::Duplicate { kind, .. } => format!("rename one of the two; every {kind} needs its own name"),
             Error::Unknown { kind: "product", name, .. } if SEQUENCE_RULES.contains(&name.as_str()) => format!("a `demo` lists its products in the order they were packed (`sequence A, C, E`); `sequence {name}` belongs in a `demos` block"),
@@ -536,12 +535,14 @@ impl Error {
             Error::DescentOutOfRange { min_percent, .. } => format!("write a share of the cell's speed from `descent {min_percent} %` to `descent 100 %` (the default: as fast as every other motion), or as a fraction (`descent 0.25`); the descent from the hover onto a product's top face keeps its path and takes 1/descent as long"),
             Error::JointCount { statement, expected, .. } => format!("write {expected} plain numbers, base first, e.g. `{statement} {}`; leave the statement out for the arm's own limits", if *statement == "jerk" { "(10, 10, 10, 20, 20, 20)" } else { "(2.5, 2.5, 2.5, 4, 4, 4)" }),
             Error::JointLimitOutOfRange { statement, min, max, unit, .. } => format!("write a {statement} limit from {min} to {max} {unit} for each joint, or leave the statement out for the arm's own limits (the built-in UR10's: `acceleration (2.5, 2.5, 2.5, 4, 4, 4)`, `jerk (10, 10, 10, 20, 20, 20)`)"),
+            Error::SlotOutsideBox { by_mm, .. } if *by_mm > 1000.0 * MILLIMETRES_LIKELY => "check the numbers and their units: positions are metres unless they carry `mm` or `cm` (`0.58`, `580 mm`); a slot stands inside its box's footprint".into(),
             Error::SlotOutsideBox { .. } => "move the slot inside the box footprint (box centre ± width/2, ± depth/2)".into(),
             Error::SlotsOverlap { .. } => "slots must be at least 10 mm apart; move or remove one".into(),
             Error::SlotTaken { .. } => "give each product its own slot".into(),
             Error::ListedTwice { .. } => "remove the second one".into(),
             Error::OutsidePending { .. } => "move the product so that its whole footprint is inside the `pending` area, or enlarge the area".into(),
             Error::ProductsOverlap { .. } => "move one of them; footprints (centre ± half the width and depth) must not overlap".into(),
+            Error::OutOfReach { min, max, distance, .. } if *distance > MILLIMETRES_LIKELY * max => format!("check the numbers and their units: positions are metres unless they carry `mm` or `cm` (`0.58`, `580 mm`); the UR10 reaches between {min:.2} m and {max:.2} m from its base axis"),
             Error::OutOfReach { min, max, .. } => format!("the UR10 reaches between {min:.2} m and {max:.2} m from its base axis; move it or the `base`"),
             Error::FarFromOrigin { max, .. } => format!("move the whole cell nearer the origin (subtract the same x and y from the base, the pending area, the boxes, the slots and every product's place): every coordinate must lie within {max} m of it, where the simulator keeps 10 µm"),
             Error::FarFromBase { max, .. } => format!("check the number and its unit: lengths and positions are metres unless they carry `mm` or `cm` (`0.65`, `650 mm`); every pending area and box lies within {max} m of the cell's `base`"),

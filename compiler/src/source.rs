@@ -33,9 +33,18 @@ pub trait Loader {
 pub enum Unreadable {
     /// There is no file at the path.
     Missing,
-    /// There is something at the path that cannot be read as `.pack`
-    /// text: a directory, a file without permission, one too large or
-    /// not UTF-8 (the reason, for people).
+    /// A directory; `compiled`: one `compile` wrote.
+    Directory { compiled: bool },
+    /// Not UTF-8 text: the first byte that is not, by line and column
+    /// (from 1; the column counts bytes).
+    NotText { line: usize, column: usize },
+    /// Larger than the limit for a source file, in MiB.
+    TooLarge { limit_mib: u64 },
+    /// Not a file on disk (a named pipe, a socket or a device), where a
+    /// file another one names must be a regular file.
+    NotAFile,
+    /// Anything else the system said (no permission, an I/O error), for
+    /// people.
     Other(String),
 }
 
@@ -43,7 +52,59 @@ impl std::fmt::Display for Unreadable {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Unreadable::Missing => f.write_str("no such file"),
+            Unreadable::Directory { compiled: true } => f.write_str(
+                "a compiled directory, not a .pack file: give the .pack files it was compiled from (`train` and `show` read compiled directories)",
+            ),
+            Unreadable::Directory { compiled: false } => {
+                f.write_str("a directory, not a .pack file")
+            }
+            Unreadable::NotText { line, column } => write!(
+                f,
+                "not UTF-8 text (the first byte that is not: line {line}, column {column})"
+            ),
+            Unreadable::TooLarge { limit_mib } => {
+                write!(f, "larger than {limit_mib} MiB, the limit for a .pack file")
+            }
+            Unreadable::NotAFile => f.write_str(
+                "not a file on disk (a named pipe, a socket or a device): a file another one names must be a regular file",
+            ),
             Unreadable::Other(reason) => f.write_str(reason),
+        }
+    }
+}
+
+impl Unreadable {
+    /// Not UTF-8 text: where in `bytes` the first byte that is not
+    /// stands ([`Unreadable::NotText`]).
+    pub fn not_text(bytes: &[u8]) -> Unreadable {
+        let valid = std::str::from_utf8(bytes).map_or_else(|e| e.valid_up_to(), str::len);
+        let before = &bytes[..valid.min(bytes.len())];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let column = valid
+            - before
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(0, |i| i + 1)
+            + 1;
+        Unreadable::NotText { line, column }
+    }
+
+    /// How to fix it, where it is the file's own problem.
+    pub fn help(&self) -> &'static str {
+        match self {
+            Unreadable::Missing => "check the path",
+            Unreadable::Directory { compiled: true } => {
+                "name the .pack files; compiled directories are for `train` and `show`"
+            }
+            Unreadable::Directory { compiled: false } => "name a .pack file, not a directory",
+            Unreadable::NotText { .. } => {
+                "save the file as UTF-8 text (in most editors: save with encoding UTF-8); a name or comment in another encoding is the usual cause"
+            }
+            Unreadable::TooLarge { .. } => {
+                "a .pack file is at most 16 MiB: split it into files joined with `use`"
+            }
+            Unreadable::NotAFile => "name a regular file",
+            Unreadable::Other(_) => "check the path and the file's permissions",
         }
     }
 }
@@ -170,6 +231,26 @@ impl SourceMap {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A file in Latin-1 (a name with an accent) is told where its first
+    /// byte that is not UTF-8 stands, and to save it as UTF-8 (helper W:
+    /// the help said to check the path and the permissions).
+    #[test]
+    fn a_file_not_in_utf8_is_told_where_and_how_to_save_it() {
+        let bytes = b"product tea cube 50 mm\nproduct caf\xe9 cube 50 mm\n";
+        let why = Unreadable::not_text(bytes);
+        assert_eq!(
+            why,
+            Unreadable::NotText {
+                line: 2,
+                column: 12
+            }
+        );
+        assert!(why.to_string().contains("line 2, column 12"), "{why}");
+        assert!(why.help().contains("UTF-8"));
+        let first = Unreadable::not_text(b"\xff\xfe");
+        assert_eq!(first, Unreadable::NotText { line: 1, column: 1 });
+    }
 
     #[test]
     fn normalises_paths() {

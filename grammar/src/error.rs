@@ -41,6 +41,15 @@ pub enum SyntaxError {
         what: &'static str,
         found: String,
     },
+    #[error(
+        "{what} is too large: a whole number is at most {}, found `{found}`",
+        u64::MAX
+    )]
+    WholeNumberTooLarge {
+        span: Span,
+        what: &'static str,
+        found: String,
+    },
     #[error("`{found}` is not a number")]
     BadNumber { span: Span, found: String },
     /// A number written with an exponent (`5e-2`), which the language
@@ -75,6 +84,7 @@ impl SyntaxError {
             | SyntaxError::MissingUnit { span, .. }
             | SyntaxError::UnexpectedUnit { span, .. }
             | SyntaxError::NotWholeNumber { span, .. }
+            | SyntaxError::WholeNumberTooLarge { span, .. }
             | SyntaxError::BadNumber { span, .. }
             | SyntaxError::Exponent { span, .. }
             | SyntaxError::Unclosed { span }
@@ -89,7 +99,7 @@ impl SyntaxError {
             SyntaxError::UnknownUnit { .. } => "E002",
             SyntaxError::MissingUnit { .. } => "E003",
             SyntaxError::UnexpectedUnit { .. } => "E004",
-            SyntaxError::NotWholeNumber { .. } => "E005",
+            SyntaxError::NotWholeNumber { .. } | SyntaxError::WholeNumberTooLarge { .. } => "E005",
             SyntaxError::BadNumber { .. } | SyntaxError::Exponent { .. } => "E006",
             SyntaxError::Unclosed { .. } => "E007",
             SyntaxError::TooMany { .. } => "E001",
@@ -104,6 +114,7 @@ impl SyntaxError {
             SyntaxError::MissingUnit { .. } => "no unit".into(),
             SyntaxError::UnexpectedUnit { .. } => "unit not allowed here".into(),
             SyntaxError::NotWholeNumber { .. } => "not a whole number".into(),
+            SyntaxError::WholeNumberTooLarge { .. } => "too large".into(),
             SyntaxError::BadNumber { .. } => "not a number".into(),
             SyntaxError::Exponent { .. } => "an exponent".into(),
             SyntaxError::Unclosed { .. } => "opened here".into(),
@@ -168,6 +179,7 @@ impl SyntaxError {
             )),
             SyntaxError::UnexpectedUnit { .. } => Some("remove the unit".into()),
             SyntaxError::NotWholeNumber { .. } => Some("write a whole number such as `3`".into()),
+            SyntaxError::WholeNumberTooLarge { .. } => Some("write a smaller number".into()),
             SyntaxError::BadNumber { .. } => Some("write a number such as `0.25` or `-12`".into()),
             SyntaxError::Exponent { plain, .. } => Some(format!(
                 "write `{plain}`: numbers are written without an exponent"

@@ -840,11 +840,22 @@ impl Builder {
         }
         match number.parse::<u64>() {
             Ok(value) => Count { value, span: s },
-            Err(_) => {
-                self.errors.push(SyntaxError::NotWholeNumber {
-                    span: s,
-                    what,
-                    found: number,
+            Err(e) => {
+                // All digits, and more than a u64 holds: too large, not
+                // "not a whole number" (helper W).
+                let too_large = *e.kind() == std::num::IntErrorKind::PosOverflow;
+                self.errors.push(if too_large {
+                    SyntaxError::WholeNumberTooLarge {
+                        span: s,
+                        what,
+                        found: number,
+                    }
+                } else {
+                    SyntaxError::NotWholeNumber {
+                        span: s,
+                        what,
+                        found: number,
+                    }
                 });
                 Count { value: 0, span: s }
             }
@@ -1042,6 +1053,31 @@ mod tests {
             assert!(under.starts_with(|c: char| c.is_ascii_digit()), "{under}");
             assert!(under.contains(['e', 'E']), "{under}");
         }
+    }
+
+    /// A count longer than a whole number holds is said to be too large
+    /// (helper W: "must be a whole number, 0 or more, found
+    /// `99999999999999999999`"); a negative one is still not a whole
+    /// number.
+    #[test]
+    fn a_count_too_large_is_told_so() {
+        let block = |n: &str| format!("scenarios s for inv {{\n  count {n}\n}}\n");
+        let errors = parse(&block("99999999999999999999")).expect_err("too large");
+        assert!(
+            matches!(
+                errors.first(),
+                Some(SyntaxError::WholeNumberTooLarge { .. })
+            ),
+            "{errors:?}"
+        );
+        let first = &errors[0];
+        assert_eq!(first.code(), "E005");
+        assert!(first.to_string().contains("too large"), "{first}");
+        let errors = parse(&block("-1")).expect_err("negative");
+        assert!(
+            matches!(errors.first(), Some(SyntaxError::NotWholeNumber { .. })),
+            "{errors:?}"
+        );
     }
 
     #[test]

@@ -34,6 +34,14 @@ pub enum ModelError {
     /// are not (weights so large that the arithmetic overflows).
     #[error("the {network} gives non-finite outputs on a probe input: its weights are unusable")]
     NonFiniteOutput { network: &'static str },
+    /// The sub-goal planner answers a probe query with a point further
+    /// from the product than any arm reaches: finite weights far beyond
+    /// any trained ones (every weight 1e20 saturates the network, whose
+    /// answer is then finite but kilometres away).
+    #[error(
+        "the sub-goal planner answers a probe input with a point {distance_m:.3e} m from the product, beyond any arm's reach: its weights are unusable"
+    )]
+    SubGoalOutOfReach { distance_m: f64 },
     /// `taught_queries` holds a bound that is not finite, or a low end
     /// above its high end.
     #[error(

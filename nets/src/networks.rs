@@ -106,6 +106,11 @@ fn denses(file: &File, prefix: &str, sizes: &[(usize, usize)]) -> Result<Vec<Den
         .collect()
 }
 
+/// How far (m) from the product a loaded sub-goal planner's answer to the
+/// load probe may lie: further than any arm reaches (a UR10 1.3 m, the
+/// largest industrial arms about 4 m) means unusable weights.
+pub const PROBE_REACH: f64 = 10.0;
+
 impl Networks {
     /// A model from its parts (after training).
     pub fn new(
@@ -229,8 +234,12 @@ impl Networks {
     }
 
     /// Checks that every network answers a typical input with finite
-    /// numbers: finite weights can still overflow (weights of 1e20).
+    /// numbers (finite weights can still overflow: weights times 1e20),
+    /// and the sub-goal planner within [`PROBE_REACH`] of the product
+    /// (every weight 1e20 saturates it: finite, kilometres away).
     fn probe(&self) -> Result<(), ModelError> {
+        /// The probe's product.
+        const FEATURE: [f32; 3] = [0.5, -0.2, 0.025];
         let node = |centre: [f32; 3], selected| Node {
             centre,
             height: 0.05,
@@ -259,7 +268,7 @@ impl Networks {
                 let g = self.subgoal(&SubGoalQuery {
                     stage,
                     index,
-                    feature: [0.5, -0.2, 0.025],
+                    feature: FEATURE,
                     tool: [0.5, -0.2, 0.35],
                     height: 0.05,
                     base: [0.0; 3],
@@ -268,6 +277,16 @@ impl Networks {
                     return Err(ModelError::NonFiniteOutput {
                         network: "sub-goal planner",
                     });
+                }
+                let distance_m = f64::from(
+                    g.iter()
+                        .zip(FEATURE)
+                        .map(|(a, b)| (a - b) * (a - b))
+                        .sum::<f32>()
+                        .sqrt(),
+                );
+                if distance_m > PROBE_REACH {
+                    return Err(ModelError::SubGoalOutOfReach { distance_m });
                 }
             }
         }
@@ -408,6 +427,13 @@ mod tests {
                 "scale {scale}"
             );
         }
+        // Every weight 1e20 (helper W): tanh saturates, the answer is
+        // finite and kilometres away.
+        let saturated = mapped(SUBGOAL, |_| 1e20);
+        assert!(matches!(
+            Networks::from_files(CONFIG, REASONER, &saturated, DYNAMICS),
+            Err(ModelError::SubGoalOutOfReach { distance_m }) if distance_m > 1e6
+        ));
         let short = &REASONER[..REASONER.len() / 2];
         assert!(matches!(
             Networks::from_files(CONFIG, short, SUBGOAL, DYNAMICS),

@@ -133,9 +133,9 @@ impl Replayed {
 impl Lesson {
     /// The demonstrations of the blocks `demos` (all when empty) in the
     /// compiled directory `dir`, whose artifacts are checked first
-    /// ([`CompiledDir::read`]).
+    /// ([`CompiledDir::read_whole`]).
     pub fn read(dir: &Path, demos: &[String]) -> Result<Lesson> {
-        let compiled = CompiledDir::read(dir)?;
+        let compiled = CompiledDir::read_whole(dir)?;
         let manifest = compiled.manifest();
         let world = compiled.world().clone();
         let known: BTreeSet<&str> = manifest

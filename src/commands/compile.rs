@@ -13,6 +13,23 @@ pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
     if !args.json {
         super::report_warnings(&compiled.sources, &compiled.warnings, false);
     }
+    // An empty file (a truncated copy, the wrong file, `/dev/null`) would
+    // replace an earlier dataset with nothing: refused, that kept.
+    if defines_nothing(&compiled.model) {
+        let why = format!(
+            "the files define nothing to compile (no cell, product, inventory, order, demonstration or scenario): {} was left as it was",
+            args.output.display()
+        );
+        if args.json {
+            outln!(
+                "{}",
+                serde_json::json!({"type": "nothing_to_compile", "error": why})
+            );
+        } else {
+            errln!("error: {why}");
+        }
+        return Ok(Exit::Diagnostics);
+    }
     // Checked before anything is written; then the artifacts are streamed
     // into a temporary sibling of the output, swapped in when complete.
     let file = &packwright_compiler::file::ALL;
@@ -60,4 +77,16 @@ pub fn run(args: &CompileArgs) -> anyhow::Result<Exit> {
         );
     }
     Ok(Exit::Success)
+}
+
+/// Whether a model holds no item at all.
+fn defines_nothing(m: &packwright_compiler::model::Model) -> bool {
+    m.cells.is_empty()
+        && m.products.is_empty()
+        && m.inventories.is_empty()
+        && m.orders.is_empty()
+        && m.demos.is_empty()
+        && m.demo_sets.is_empty()
+        && m.scenarios.is_empty()
+        && m.scenario_sets.is_empty()
 }

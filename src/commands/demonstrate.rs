@@ -10,7 +10,7 @@ use packwright_pipeline::replay::replay_all;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
-    let compiled = CompiledDir::read(&args.dir)?;
+    let compiled = CompiledDir::read_whole(&args.dir)?;
     let (demonstrations, world) = (compiled.demonstrations(), compiled.world());
     if demonstrations.is_empty() {
         bail!(

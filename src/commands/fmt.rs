@@ -2,7 +2,7 @@
 
 use crate::Exit;
 use crate::cli::FmtArgs;
-use crate::fsio::{read_source, write_file_atomically};
+use crate::fsio::{read_source, rewrite_source_atomically};
 use packwright_compiler::{Error, Loc, SourceMap, diagnostic};
 
 pub fn run(args: &FmtArgs) -> anyhow::Result<Exit> {
@@ -33,7 +33,7 @@ pub fn run(args: &FmtArgs) -> anyhow::Result<Exit> {
                 outln!("{}", path.display());
                 exit = Exit::Diagnostics;
             } else {
-                write_file_atomically(path, formatted.as_bytes())?;
+                rewrite_source_atomically(path, formatted.as_bytes())?;
                 errln!("formatted {}", path.display());
             }
         }

@@ -67,7 +67,7 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
         ..TrainConfig::default()
     };
     if let Some(e) = args.epochs {
-        config.epochs = e.max(1);
+        config.epochs = e;
         config.dagger_epochs = config.dagger_epochs.min(config.epochs);
     }
     if let Some(r) = args.dagger_rounds {

@@ -82,6 +82,18 @@ pub struct CompiledDir {
 }
 
 impl CompiledDir {
+    /// [`CompiledDir::read`], then every other file checked too
+    /// ([`CompiledDir::graphs`], [`CompiledDir::combinations`]), though
+    /// the caller uses only the JSON: a directory with a file missing or
+    /// cut short (a copy interrupted) is refused by every command that
+    /// reads it, not only by `show`.
+    pub fn read_whole(dir: &Path) -> Result<CompiledDir> {
+        let compiled = CompiledDir::read(dir)?;
+        compiled.graphs()?;
+        compiled.combinations()?;
+        Ok(compiled)
+    }
+
     /// Reads and checks the JSON artifacts in `dir` (see the type's
     /// invariants); the first problem found is the error. Each file's
     /// schema and version are reported before anything else about it, so
