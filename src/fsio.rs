@@ -215,28 +215,31 @@ fn sibling(path: &Path, tag: &str) -> PathBuf {
     parent.join(format!(".{name}.{tag}-{}", std::process::id()))
 }
 
-/// Makes the directory `path` goes in, when missing. One of its
-/// ancestors that is a file, not a directory, is named (the system says
-/// only "File exists").
+/// Makes the directory `path` goes in, when missing ([`make_dir`]).
 fn make_parent(path: &Path) -> anyhow::Result<()> {
-    let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) else {
-        return Ok(());
-    };
-    if parent.is_dir() {
+    match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(parent) => {
+            make_dir(parent).with_context(|| format!("cannot write {}", path.display()))
+        }
+        None => Ok(()),
+    }
+}
+
+/// Makes the directory `dir` (and its parents) when missing. The path or
+/// an ancestor that is a file, not a directory, is named (the system says
+/// only "File exists").
+pub fn make_dir(dir: &Path) -> anyhow::Result<()> {
+    if dir.is_dir() {
         return Ok(());
     }
-    if let Some(file) = parent
+    if let Some(file) = dir
         .ancestors()
         .find(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir())
     {
-        bail!(
-            "{} is a file, not a directory: {} cannot be made under it",
-            file.display(),
-            path.display()
-        );
+        bail!("{} is a file, not a directory", file.display());
     }
-    fs::create_dir_all(parent)
-        .with_context(|| format!("cannot create the directory {}", parent.display()))
+    fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create the directory {}", dir.display()))
 }
 
 fn write_synced(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
@@ -792,6 +795,29 @@ mod tests {
         assert_eq!(
             fs::read_to_string(real.join("manifest.json")).expect("read"),
             manifest("new")
+        );
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// A directory asked for under a file names the file (helper W: "cannot
+    /// create afile: File exists").
+    #[test]
+    fn a_directory_under_a_file_names_the_file() {
+        let dir = scratch("under-a-file");
+        let file = dir.join("afile");
+        fs::write(&file, "x").expect("written");
+        for asked in [file.clone(), file.join("sub")] {
+            let err = make_dir(&asked).expect_err("under a file");
+            assert!(
+                err.to_string()
+                    .contains(&format!("{} is a file, not a directory", file.display())),
+                "{err}"
+            );
+        }
+        let err = write_file_atomically(&file.join("sub/x.svg"), b"x").expect_err("under a file");
+        assert!(
+            format!("{err:#}").contains("is a file, not a directory"),
+            "{err:#}"
         );
         let _ = fs::remove_dir_all(&dir);
     }

@@ -278,13 +278,12 @@ impl Networks {
                         network: "sub-goal planner",
                     });
                 }
-                let distance_m = f64::from(
-                    g.iter()
-                        .zip(FEATURE)
-                        .map(|(a, b)| (a - b) * (a - b))
-                        .sum::<f32>()
-                        .sqrt(),
-                );
+                let distance_m = g
+                    .iter()
+                    .zip(FEATURE)
+                    .map(|(a, b)| (f64::from(*a) - f64::from(b)).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
                 if distance_m > PROBE_REACH {
                     return Err(ModelError::SubGoalOutOfReach { distance_m });
                 }

@@ -157,8 +157,7 @@ pub fn run(args: &ChartArgs) -> anyhow::Result<Exit> {
         ),
         "n: products in the order",
     )?;
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("cannot create {}", args.output.display()))?;
+    crate::fsio::make_dir(&args.output)?;
     for (name, svg) in [("success_vs_x.svg", vs_x), ("success_vs_n.svg", vs_n)] {
         let path = args.output.join(name);
         write_file_atomically(&path, svg.as_bytes())?;

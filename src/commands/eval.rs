@@ -4,7 +4,6 @@
 use crate::Exit;
 use crate::cli::EvalArgs;
 use crate::fsio::{FsLoader, write_file_atomically};
-use anyhow::Context;
 use anyhow::bail;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use packwright_compiler::Compiled;
@@ -331,7 +330,7 @@ fn recorded_case(
         })
         .collect();
     if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        crate::fsio::make_dir(dir)?;
     }
     super::execute::write_recording(path, &runs)?;
     Ok(result)
@@ -384,7 +383,7 @@ fn write_plots(dir: &Path, rows: &[Row], results: &[CaseResult]) -> anyhow::Resu
             bound_s: runs(p).flat_map(|r| r.bound_s.clone()).collect(),
         })
         .collect();
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    crate::fsio::make_dir(dir)?;
     for (name, svg) in [
         ("success_rate.svg", charts::success_rates(&rates)?),
         ("latency.svg", charts::latencies(&latencies)?),
