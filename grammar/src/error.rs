@@ -58,8 +58,9 @@ pub enum SyntaxError {
     Exponent {
         span: Span,
         written: String,
-        /// The number without one (`0.05`).
-        plain: String,
+        /// The number without one (`0.05`); `None` when that is no
+        /// number a cell could use (`1e400`, `1e308`, `1e-400`).
+        plain: Option<String>,
     },
     #[error("this `{{` is never closed")]
     Unclosed { span: Span },
@@ -181,9 +182,14 @@ impl SyntaxError {
             SyntaxError::NotWholeNumber { .. } => Some("write a whole number such as `3`".into()),
             SyntaxError::WholeNumberTooLarge { .. } => Some("write a smaller number".into()),
             SyntaxError::BadNumber { .. } => Some("write a number such as `0.25` or `-12`".into()),
-            SyntaxError::Exponent { plain, .. } => Some(format!(
+            SyntaxError::Exponent {
+                plain: Some(plain), ..
+            } => Some(format!(
                 "write `{plain}`: numbers are written without an exponent"
             )),
+            SyntaxError::Exponent { plain: None, .. } => Some(
+                "numbers are written without an exponent, and this one is far beyond any length, mass or time a cell uses: check it".into(),
+            ),
             SyntaxError::Unclosed { .. } => {
                 Some("close the block with `}` after its last statement".into())
             }

@@ -140,7 +140,7 @@ fn describe(rule: Rule) -> Option<&'static str> {
 /// at its exponent (`5` read with the unit `e`, then `-2` unexpected):
 /// the whole literal's span, the literal and the number written plainly
 /// (`0.05`), when the text at `at` is the exponent of one.
-fn scientific(src: &str, at: Span) -> Option<(Span, String, String)> {
+fn scientific(src: &str, at: Span) -> Option<(Span, String, Option<String>)> {
     let exponent = src.get(at.start as usize..at.end as usize)?;
     let before = src.get(..at.start as usize)?;
     let mantissa_end = before.strip_suffix(['e', 'E'])?;
@@ -162,10 +162,21 @@ fn scientific(src: &str, at: Span) -> Option<(Span, String, String)> {
     let written = format!("{mantissa}{}{exponent}", &before[mantissa_end.len()..]);
     let value: f64 = written.parse().ok()?;
     let span = Span::new(mantissa_start, at.end as usize);
-    value
-        .is_finite()
-        .then(|| (span, written, format!("{value}")))
+    // Written plainly only where that is a number a cell could use: not
+    // 309 digits (`1e308`), infinity (`1e400`) or a zero the exponent
+    // made (`1e-400`).
+    let plain = format!("{value}");
+    let mantissa_zero = mantissa
+        .trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.');
+    let usable =
+        value.is_finite() && plain.len() <= PLAIN_DIGITS && (value != 0.0 || mantissa_zero);
+    Some((span, written, usable.then_some(plain)))
 }
+
+/// The longest number [`scientific`] writes out plainly.
+const PLAIN_DIGITS: usize = 16;
 
 fn from_pest(src: &str, e: pest::error::Error<Rule>, offset: usize, context: Place) -> SyntaxError {
     let pos = offset
@@ -1078,6 +1089,24 @@ mod tests {
             matches!(errors.first(), Some(SyntaxError::NotWholeNumber { .. })),
             "{errors:?}"
         );
+    }
+
+    /// An exponent that writes no usable number (helper W: `1e400` was
+    /// E001 at `400`, `1e308`'s help wrote 309 digits, `1e-400`'s said
+    /// `0`) is E006 with a help that says so.
+    #[test]
+    fn an_exponent_beyond_any_cell_says_so() {
+        for text in [
+            "product q cube 1e400\n",
+            "product q cube 1e308\n",
+            "product q cube 1e-400\n",
+        ] {
+            let errors = parse(text).expect_err(text);
+            let first = errors.first().expect("an error");
+            assert_eq!(first.code(), "E006", "{text}: {first}");
+            let help = first.help().unwrap_or_default();
+            assert!(help.contains("far beyond"), "{text}: {help}");
+        }
     }
 
     #[test]
