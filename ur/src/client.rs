@@ -63,9 +63,12 @@ pub fn connect(address: &str, service: Service, timeout: Duration) -> Result<Tcp
         TcpStream::connect_timeout(&addr, timeout).map_err(|source| UrError::Unreachable {
             service,
             address: address.into(),
-            source,
+            cause: source,
         })?;
-    let io = |source| UrError::Io { service, source };
+    let io = |source| UrError::Io {
+        service,
+        cause: source,
+    };
     stream.set_read_timeout(Some(timeout)).map_err(io)?;
     stream.set_write_timeout(Some(timeout)).map_err(io)?;
     stream.set_nodelay(true).map_err(io)?;
@@ -75,7 +78,7 @@ pub fn connect(address: &str, service: Service, timeout: Duration) -> Result<Tcp
 fn io(source: std::io::Error) -> UrError {
     UrError::Io {
         service: Service::Rtde,
-        source,
+        cause: source,
     }
 }
 
@@ -164,9 +167,26 @@ impl Client {
             }
             let now = Instant::now();
             if now >= deadline {
+                let waited = now - started;
+                // Something came, never a whole packet: not silence.
+                let pending = self.framer.pending();
+                if pending > 0 {
+                    return Err(UrError::NotRtde {
+                        service: Service::Rtde,
+                        waited,
+                        pending,
+                        begins: self
+                            .framer
+                            .head(8)
+                            .iter()
+                            .map(|b| format!("{b:02x}"))
+                            .collect::<Vec<_>>()
+                            .join(" "),
+                    });
+                }
                 return Err(UrError::Timeout {
                     service: Service::Rtde,
-                    waited: now - started,
+                    waited,
                     expected,
                 });
             }
@@ -498,6 +518,29 @@ mod tests {
 
     /// Three packages queued (and the connection closed behind them): the
     /// newest is taken, then the close is reported.
+    /// Another service on the port (a web server's reply to the
+    /// handshake): said to be no RTDE, not "sent nothing" (helper W).
+    #[test]
+    fn a_port_that_answers_no_rtde_is_told_apart_from_silence() {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let address = listener.local_addr().unwrap().to_string();
+        let server = std::thread::spawn(move || {
+            let (mut s, _) = listener.accept().unwrap();
+            let mut buf = [0u8; 64];
+            let _ = s.read(&mut buf);
+            s.write_all(b"HTTP/1.1 400 Bad Request\r\n\r\n").unwrap();
+            std::thread::sleep(REPLY_TIMEOUT + Duration::from_millis(500));
+        });
+        let Err(e) = Client::connect(&address) else {
+            panic!("no RTDE there")
+        };
+        assert!(
+            matches!(&e, UrError::NotRtde { pending: 28, begins, .. } if begins.starts_with("48 54 54 50")),
+            "{e}"
+        );
+        server.join().unwrap();
+    }
+
     #[test]
     fn the_newest_of_queued_packages_is_taken() {
         let bytes = [package(1.0), package(2.0), package(3.0)].concat();

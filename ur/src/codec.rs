@@ -430,6 +430,11 @@ impl Framer {
     pub fn pending(&self) -> usize {
         self.buf.len()
     }
+
+    /// The first of the bytes waiting (at most `n`).
+    pub fn head(&self, n: usize) -> &[u8] {
+        &self.buf[..n.min(self.buf.len())]
+    }
 }
 
 /// The type of an RTDE field, as the controller names it.

@@ -24,7 +24,7 @@ impl Dashboard {
         let stream = connect(address, Service::Dashboard, timeout)?;
         let writer = stream.try_clone().map_err(|source| UrError::Io {
             service: Service::Dashboard,
-            source,
+            cause: source,
         })?;
         let mut d = Dashboard {
             reader: BufReader::new(stream),
@@ -38,7 +38,7 @@ impl Dashboard {
         let mut s = String::new();
         let io = |source| UrError::Io {
             service: Service::Dashboard,
-            source,
+            cause: source,
         };
         let n = (&mut self.reader)
             .take(4096)
@@ -59,7 +59,7 @@ impl Dashboard {
             .write_all(format!("{command}\n").as_bytes())
             .map_err(|source| UrError::Io {
                 service: Service::Dashboard,
-                source,
+                cause: source,
             })?;
         self.line()
     }

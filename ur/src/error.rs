@@ -15,20 +15,21 @@ pub enum UrError {
     BadAddress { address: String, reason: String },
     /// Nothing answered at the address (no route, refused, timed out).
     #[error(
-        "cannot reach the robot's {service} at {address}: {source} (is the controller on and on this network?)"
+        "cannot reach the robot's {service} at {address}: {cause} (is the controller on and on this network?)"
     )]
     Unreachable {
         service: Service,
         address: String,
-        #[source]
-        source: std::io::Error,
+        /// What the system said (in the message, so not a `source`
+        /// too: a chain printed it twice).
+        cause: std::io::Error,
     },
     /// A read or write on an open connection failed, or it closed.
-    #[error("the connection to the robot's {service} failed: {source}")]
+    #[error("the connection to the robot's {service} failed: {cause}")]
     Io {
         service: Service,
-        #[source]
-        source: std::io::Error,
+        /// What the system said (in the message only).
+        cause: std::io::Error,
     },
     /// The controller sent no reply (or no data) in time.
     #[error("the robot's {service} sent nothing for {waited:?} (expected {expected})")]
@@ -37,9 +38,22 @@ pub enum UrError {
         waited: Duration,
         expected: &'static str,
     },
+    /// Bytes arrived but made no whole RTDE packet in time: something
+    /// else answers on that port (a web server, a serial bridge), whose
+    /// first bytes read as a header asking for more than it sends.
+    #[error(
+        "the robot's {service} sent {pending} bytes in {waited:?} that make no whole RTDE packet (they begin {begins}): is another service listening on that port?"
+    )]
+    NotRtde {
+        service: Service,
+        waited: Duration,
+        pending: usize,
+        /// The first bytes, in hex.
+        begins: String,
+    },
     /// A malformed packet.
     #[error("malformed packet from the controller: {0}")]
-    Codec(#[from] CodecError),
+    Codec(CodecError),
     /// The controller refused RTDE protocol version 2.
     #[error("the controller refused RTDE protocol version {version}")]
     ProtocolRefused { version: u16 },
@@ -119,5 +133,13 @@ impl std::fmt::Display for Service {
             Service::Dashboard => "dashboard server",
             Service::Feed => "product feed",
         })
+    }
+}
+
+/// (By hand, not `#[from]`: that would make the codec error a source as
+/// well as part of the message, printed twice in a chain.)
+impl From<CodecError> for UrError {
+    fn from(e: CodecError) -> UrError {
+        UrError::Codec(e)
     }
 }

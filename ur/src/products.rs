@@ -181,11 +181,11 @@ impl JsonFeed {
             .set_read_timeout(None)
             .map_err(|source| UrError::Io {
                 service: Service::Feed,
-                source,
+                cause: source,
             })?;
         let read = stream.try_clone().map_err(|source| UrError::Io {
             service: Service::Feed,
-            source,
+            cause: source,
         })?;
         let state = Arc::new(Mutex::new(FeedState::default()));
         let shared = Arc::clone(&state);

@@ -259,7 +259,7 @@ impl Ur10World {
             .spawn(move || streamer.run())
             .map_err(|source| UrError::Io {
                 service: Service::Rtde,
-                source,
+                cause: source,
             })?;
         Ok(Ur10World {
             sync,
@@ -353,7 +353,7 @@ fn send_program(address: &RobotAddress, text: &str) -> Result<(), UrError> {
         .and_then(|_| s.flush())
         .map_err(|source| UrError::Io {
             service: Service::Secondary,
-            source,
+            cause: source,
         })
 }
 
