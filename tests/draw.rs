@@ -292,6 +292,17 @@ fn chart_draws_a_study_from_eval_reports() {
         assert!(!o.stderr.is_empty(), "{bad}: says why");
         assert!(!refused.exists(), "{bad}: nothing written");
     }
+    // Two runs at one value (helper W: drawn silently).
+    let o = packwright(&[
+        "chart",
+        &run("0.5"),
+        &run("0.5"),
+        "-o",
+        refused.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("two runs at"));
+    assert!(!refused.exists(), "nothing written");
 }
 
 /// What `execute --svg` draws: the expert packing deli_crate, recorded

@@ -35,7 +35,7 @@ pub enum SyntaxError {
     MissingUnit { span: Span, number: String },
     #[error("{what} takes a plain number, without a unit")]
     UnexpectedUnit { span: Span, what: &'static str },
-    #[error("{what} must be a whole number, 0 or more, found `{found}`")]
+    #[error("{what} must be a whole number (no sign, no decimals), found `{found}`")]
     NotWholeNumber {
         span: Span,
         what: &'static str,

@@ -130,6 +130,18 @@ fn points(
 }
 
 pub fn run(args: &ChartArgs) -> anyhow::Result<Exit> {
+    // Two runs at one x would be drawn as one point of either: refused.
+    let mut seen: Vec<f64> = Vec::new();
+    for (x, path) in &args.runs {
+        if seen.contains(x) {
+            bail!(
+                "two runs at {} = {x} ({} is the second): give each run its own value",
+                args.x,
+                path.display()
+            );
+        }
+        seen.push(*x);
+    }
     let reports = args
         .runs
         .iter()
