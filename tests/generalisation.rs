@@ -161,8 +161,8 @@ fn a_model_taught_three_hand_written_demonstrations_keeps_its_rule_on_larger_ord
     // those 8 pairs are named as ordered by the inventory, not taught.
     let guessed = report["warnings"]
         .as_array()
-        .and_then(|w| w.iter().find(|w| w["kind"] == "list_guessed"))
-        .unwrap_or_else(|| panic!("a list_guessed warning: {report}"));
+        .and_then(|w| w.iter().find(|w| w["kind"] == "pairs_guessed"))
+        .unwrap_or_else(|| panic!("a pairs_guessed warning: {report}"));
     assert_eq!(
         (&guessed["ordered"], &guessed["pairs"]),
         (&7.into(), &15.into()),

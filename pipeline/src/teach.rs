@@ -608,11 +608,12 @@ pub struct Inferred {
     /// hand-written demonstration of two products taught `descending`
     /// where the line packs by a priority list that put those two so).
     pub rivals: Vec<SequenceRule>,
-    /// A priority list read from the demonstrations (none declared):
-    /// the pairs of products it orders that no demonstration orders,
-    /// directly or through others. The list orders them as the inventory
-    /// lists them where the taught pairs allow: a guess, not something
-    /// taught.
+    /// A priority list read from the demonstrations (none declared), or a
+    /// direction read from demonstrations that order fewer than half of
+    /// the pairs of products: the pairs it orders that no demonstration
+    /// orders, directly or through others. A list orders them as the
+    /// inventory lists them where the taught pairs allow, a direction as
+    /// it orders the rest: a guess, not something taught.
     pub guessed: Guessed,
 }
 
@@ -941,11 +942,6 @@ pub fn sequence_rule(
                 guessed: Guessed::default(),
             },
         );
-    if declared.is_empty()
-        && let SequenceRule::Listed(list) = &best.rule
-    {
-        best.guessed = guessed(list, after);
-    }
     // The pairs of products the demonstrations put in an order.
     let pairs: BTreeSet<(&str, &str)> = votes
         .keys()
@@ -972,6 +968,23 @@ pub fn sequence_rule(
             })
             .map(|(r, _)| r)
             .collect();
+    }
+    // What the rule orders that no demonstration does: every such pair
+    // of a list read from them; of a direction, when they order fewer
+    // than half of the pairs and nothing else fits as well (that is said
+    // with the rivals).
+    if declared.is_empty() {
+        let listed = matches!(best.rule, SequenceRule::Listed(_));
+        let order: Vec<String> = best
+            .rule
+            .chain(&names)
+            .into_iter()
+            .map(|i| names[i].to_owned())
+            .collect();
+        let g = guessed(&order, after);
+        if listed || (best.rivals.is_empty() && 2 * g.ordered < g.pairs) {
+            best.guessed = g;
+        }
     }
     let agree = demos.len() - best.exceptions.len();
     if !explains_majority(agree, demos.len()) {
@@ -1253,7 +1266,14 @@ inventory inv for c {{
         let inferred = rule_of(&three).ok().flatten().expect("a rule");
         assert_eq!(inferred.rule, SequenceRule::Descending);
         assert!(inferred.rivals.is_empty(), "{:?}", inferred.rivals);
-        // A direction guesses no pair of a list.
+        // A direction from 3 of 15 pairs (helper V: one demonstration of
+        // three products, silent): the other 12 are said to be guessed.
+        assert_eq!((inferred.guessed.ordered, inferred.guessed.pairs), (3, 15));
+        assert_eq!(inferred.guessed.untaught.len(), 12);
+        // Demonstrations that chain every product: nothing guessed.
+        let chained = by_hand(&[&["p1", "p2", "p3"], &["p3", "p4", "p5"], &["p5", "p6"]]);
+        let inferred = rule_of(&chained).ok().flatten().expect("a rule");
+        assert_eq!(inferred.rule, SequenceRule::Ascending);
         assert_eq!(inferred.guessed, Guessed::default());
         let declared = "demos d for inv {
   choose 2 of p2, p3 into s1, s2

@@ -112,9 +112,11 @@ pub enum Weakness {
         rivals: Vec<packwright_interface::SequenceRule>,
     },
     /// A priority list read from demonstrations (none declared) that
-    /// order only some of its pairs of products: the others stand in it
-    /// as the inventory lists them ([`packwright_pipeline::teach::Guessed`]).
-    ListGuessed {
+    /// order only some of its pairs of products, the others standing in
+    /// it as the inventory lists them; or a direction read from
+    /// demonstrations that order fewer than half of them
+    /// ([`packwright_pipeline::teach::Guessed`]).
+    PairsGuessed {
         taught: packwright_interface::SequenceRule,
         /// Pairs the demonstrations order, directly or through others.
         ordered: usize,
@@ -186,7 +188,7 @@ impl std::fmt::Display for Weakness {
                     .collect::<Vec<_>>()
                     .join("; ")
             ),
-            Weakness::ListGuessed {
+            Weakness::PairsGuessed {
                 taught,
                 ordered,
                 pairs,
@@ -206,9 +208,21 @@ impl std::fmt::Display for Weakness {
                     .map(|(a, seconds)| format!("{a} before {}", and_list(seconds)))
                     .collect();
                 let more: usize = groups.iter().skip(GROUPS_SHOWN).map(|g| g.1.len()).sum();
+                let (kept, how, declare) = match taught {
+                    packwright_interface::SequenceRule::Listed(_) => (
+                        "in the priority list the model keeps",
+                        "as the inventory lists them, where the taught pairs allow,",
+                        "the whole list in a `demos` block (`sequence listed`, the `choose` list in priority order)",
+                    ),
+                    _ => (
+                        "in the order the model keeps",
+                        "by that order too,",
+                        "the order in a `demos` block (`sequence ascending`, `descending`, or `listed` with the `choose` list in priority order)",
+                    ),
+                };
                 write!(
                     f,
-                    "the demonstrations order {ordered} of the {pairs} pairs of products in the priority list the model keeps ({taught}); the model orders the other {} as the inventory lists them, where the taught pairs allow, and no demonstration showed them: {}{}. If the line packs them otherwise, show those products together in a demonstration, or declare the whole list in a `demos` block (`sequence listed`, the `choose` list in priority order)",
+                    "the demonstrations order {ordered} of the {pairs} pairs of products {kept}, {taught}. The model orders the other {} {how} and no demonstration showed them: {}{}. If the line packs them otherwise, show those products together in a demonstration, or declare {declare}",
                     untaught.len(),
                     shown.join("; "),
                     if more > 0 {
@@ -364,7 +378,7 @@ pub fn run(
             rivals: lesson.rivals.clone(),
         });
     } else if !lesson.guessed.untaught.is_empty() {
-        warnings.push(Weakness::ListGuessed {
+        warnings.push(Weakness::PairsGuessed {
             taught: lesson.sequence.clone(),
             ordered: lesson.guessed.ordered,
             pairs: lesson.guessed.pairs,
@@ -535,7 +549,7 @@ mod tests {
             )
         };
         let pair = |a: &str, b: &str| (a.to_owned(), b.to_owned());
-        let w = Weakness::ListGuessed {
+        let w = Weakness::PairsGuessed {
             taught: list(&["a", "b", "c", "d", "e", "f"]),
             ordered: 9,
             pairs: 15,
@@ -551,11 +565,36 @@ mod tests {
         let text = w.to_string();
         assert!(text.contains("order 9 of the 15 pairs"), "{text}");
         assert!(
+            text.contains("in the priority list the model keeps"),
+            "{text}"
+        );
+        assert!(
             text.contains("the other 6 as the inventory lists them"),
             "{text}"
         );
         assert!(
             text.contains(": a before b and c; b before d; c before d and e; and 1 more pair."),
+            "{text}"
+        );
+    }
+
+    /// A direction read from few pairs says it orders the rest too.
+    #[test]
+    fn a_guessed_direction_says_the_rest_follow_it() {
+        let w = Weakness::PairsGuessed {
+            taught: packwright_interface::SequenceRule::Ascending,
+            ordered: 3,
+            pairs: 28,
+            untaught: vec![("a".to_owned(), "b".to_owned())],
+        };
+        let text = w.to_string();
+        assert!(
+            text.contains("in the order the model keeps, ascending"),
+            "{text}"
+        );
+        assert!(text.contains("by that order too"), "{text}");
+        assert!(
+            text.contains("`sequence ascending`, `descending`"),
             "{text}"
         );
     }
