@@ -555,3 +555,63 @@ demo right_again for ro {
   sequence a3, a2, a1
 }
 "#;
+
+/// Helper X's cells taught together (tests/cells/multi/): what one model
+/// keeps for each. `silent.pack`: a cell's two hand-written pairs read
+/// as the other cell's declared list when read alone, and the cell was
+/// packed in that list without a word; its own reading is descending
+/// now, and the shared products keep the joint list, said
+/// (`cell_reads_otherwise`). `borrowed.pack`: `down` keeps descending;
+/// the rule for `up` came from both cells' demonstrations (D and E
+/// first), not up's own ascending. `few_pairs.pack`: `solo` keeps its
+/// own rule read from one pair, said as when taught alone.
+#[test]
+fn cells_taught_together_keep_their_own_orders_and_say_so() {
+    let dir = scratch("learning", "multi");
+    let train = |name: &str| -> serde_json::Value {
+        let source =
+            fs::read_to_string(format!("tests/cells/multi/{name}.pack")).expect("the cells");
+        fs::create_dir_all(dir.join(name)).expect("a directory");
+        let compiled = compiled_text(&dir.join(name), &source);
+        let model = dir.join(name).join("model").display().to_string();
+        let out = short_train(&compiled, &model);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+        serde_json::from_slice(&out.stdout).expect("JSON")
+    };
+    let kinds = |report: &serde_json::Value| -> Vec<String> {
+        report["warnings"]
+            .as_array()
+            .map(|w| {
+                w.iter()
+                    .map(|w| w["kind"].as_str().unwrap_or("").to_owned())
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let silent = train("silent");
+    assert!(
+        silent["warnings"].as_array().is_some_and(|w| w
+            .iter()
+            .any(|w| w["kind"] == "cell_reads_otherwise" && w["cell"] == "right")),
+        "{silent}"
+    );
+    let borrowed = train("borrowed");
+    assert_eq!(borrowed["sequence"], "ascending", "{borrowed}");
+    assert_eq!(
+        borrowed["cell_rules"],
+        serde_json::json!({"down": "descending"}),
+        "{borrowed}"
+    );
+    assert!(
+        !kinds(&borrowed).contains(&"cell_reads_otherwise".to_owned()),
+        "{borrowed}"
+    );
+    let few = train("few_pairs");
+    assert_eq!(few["cell_rules"]["solo"], "descending", "{few}");
+    assert!(
+        few["warnings"].as_array().is_some_and(|w| w
+            .iter()
+            .any(|w| w["kind"] == "rule_from_few_pairs" && w["cell"] == "solo")),
+        "{few}"
+    );
+}

@@ -55,6 +55,10 @@ pub struct Lesson {
     /// Other rules the demonstrations follow as well, when they show few
     /// pairs of products in order ([`Inferred::rivals`]).
     pub rivals: Vec<SequenceRule>,
+    /// With several cells: each cell that keeps its own rule
+    /// ([`Lesson::cell_rules`]) read from few pairs, with the other rules
+    /// its demonstrations follow as well ([`Inferred::rivals`]).
+    pub cell_rivals: Vec<(String, Vec<SequenceRule>)>,
     /// The pairs of products a priority list read from the
     /// demonstrations orders as the inventory lists them
     /// ([`Inferred::guessed`]).
@@ -198,6 +202,7 @@ impl Lesson {
             .collect();
         let mut read_otherwise = Vec::new();
         let mut cell_rules = BTreeMap::new();
+        let mut cell_rivals = Vec::new();
         let Inferred {
             rule: sequence,
             exceptions,
@@ -215,12 +220,17 @@ impl Lesson {
                 ordered.iter().map(|&k| chosen[k].clone()).collect();
             // The priorities `sequence listed` blocks wrote, of the blocks
             // taught.
-            let declared: Vec<Vec<String>> = manifest
-                .demo_blocks
-                .iter()
-                .filter(|b| !b.priority.is_empty() && blocks.contains(&b.name))
-                .map(|b| b.priority.clone())
-                .collect();
+            // Those of the cells `keep` keeps.
+            let declared_in = |keep: &dyn Fn(&str) -> bool| -> Vec<Vec<String>> {
+                manifest
+                    .demo_blocks
+                    .iter()
+                    .filter(|b| !b.priority.is_empty() && blocks.contains(&b.name))
+                    .filter(|b| keep(&b.cell))
+                    .map(|b| b.priority.clone())
+                    .collect()
+            };
+            let declared = declared_in(&|_| true);
             // The blocks that declared `sequence ascending` or
             // `descending`.
             let directed: BTreeSet<&str> = manifest
@@ -240,7 +250,12 @@ impl Lesson {
                         .collect();
                     let own: Vec<DemonstrationRecord> =
                         mine.iter().map(|&i| shown[i].clone()).collect();
-                    let rule = sequence_rule(&world, &own, &declared, &directed);
+                    // Read alone: with its own blocks' declared lists
+                    // only (another cell's `sequence listed` made a cell's
+                    // two hand-written pairs read as that list, and the
+                    // cell was packed in it without a word).
+                    let own_declared = declared_in(&|c| c == cell.as_str());
+                    let rule = sequence_rule(&world, &own, &own_declared, &directed);
                     (cell, mine, rule)
                 })
                 .filter(|(_, mine, _)| !mine.is_empty())
@@ -250,7 +265,8 @@ impl Lesson {
             // ascending, the other descending), each of which follows
             // one: each keeps its own, and the rule for every other cell
             // is the one that explains the most.
-            let (inferred, each_own) = match sequence_rule(&world, &shown, &declared, &directed) {
+            let (mut inferred, each_own) = match sequence_rule(&world, &shown, &declared, &directed)
+            {
                 Ok(inferred) => (inferred, false),
                 Err(PipelineError::ContradictorySequence(why))
                     if !alone.is_empty() && alone.iter().all(|(_, _, r)| r.is_ok()) =>
@@ -277,6 +293,9 @@ impl Lesson {
                 if each_own {
                     exceptions.extend(own.exceptions.iter().map(|&e| mine[e]));
                     if otherwise {
+                        if !own.rivals.is_empty() {
+                            cell_rivals.push((cell.clone(), own.rivals));
+                        }
                         cell_rules.insert(cell.clone(), own.rule);
                     }
                     continue;
@@ -288,9 +307,36 @@ impl Lesson {
                 if own_rule(&world, &cells, cell, broken) {
                     exceptions.retain(|i| !mine.contains(i));
                     exceptions.extend(own.exceptions.iter().map(|&e| mine[e]));
+                    // Kept from few pairs: said for this cell, as for a
+                    // cell taught alone.
+                    if !own.rivals.is_empty() {
+                        cell_rivals.push((cell.clone(), own.rivals));
+                    }
                     cell_rules.insert(cell.clone(), own.rule);
                 } else {
                     read_otherwise.push((cell.clone(), own.rule));
+                }
+            }
+            // The rule for the other cells, read again without the cells
+            // that keep their own: their demonstrations no longer order
+            // the others' products (a cell kept descending put D and E
+            // first in the list another cell, taught ascending, was then
+            // packed in).
+            if !each_own && !cell_rules.is_empty() {
+                let rest: Vec<usize> = (0..shown.len())
+                    .filter(|&i| !cell_rules.contains_key(&shown[i].cell))
+                    .collect();
+                let rest_demos: Vec<DemonstrationRecord> =
+                    rest.iter().map(|&i| shown[i].clone()).collect();
+                let rest_declared = declared_in(&|c| !cell_rules.contains_key(c));
+                if !rest.is_empty()
+                    && let Ok(again) = sequence_rule(&world, &rest_demos, &rest_declared, &directed)
+                {
+                    exceptions.retain(|&i| cell_rules.contains_key(&shown[i].cell));
+                    exceptions.extend(again.exceptions.iter().map(|&e| rest[e]));
+                    read_otherwise
+                        .retain(|(cell, own)| orders_otherwise(&world, cell, own, &again.rule));
+                    inferred.rule = again.rule;
                 }
             }
             Inferred {
@@ -326,6 +372,7 @@ impl Lesson {
             cell_rules,
             read_otherwise,
             rivals,
+            cell_rivals,
             guessed,
         })
     }

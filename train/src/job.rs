@@ -108,6 +108,9 @@ pub enum Weakness {
     /// well and order the products no demonstration shows together
     /// otherwise.
     RuleFromFewPairs {
+        /// With several cells taught: the cell that keeps this rule of
+        /// its own.
+        cell: Option<String>,
         taught: packwright_interface::SequenceRule,
         rivals: Vec<packwright_interface::SequenceRule>,
     },
@@ -178,9 +181,17 @@ impl std::fmt::Display for Weakness {
                 f,
                 "cell `{cell}`'s demonstrations alone follow the order {alone}; it shares products with the other cells taught, whose demonstrations order them too, so the model follows the order taught over all of them there, {taught}: train the cell on its own (`--demos`) to keep its order"
             ),
-            Weakness::RuleFromFewPairs { taught, rivals } => write!(
+            Weakness::RuleFromFewPairs {
+                cell,
+                taught,
+                rivals,
+            } => write!(
                 f,
-                "the demonstrations put fewer than {} pairs of products in an order, and other orders follow them as well ({}): the model keeps {taught}. If the line packs otherwise, show it in a demonstration that orders products these disagree on, or declare it in a `demos` block (`sequence ascending`, `descending`, or `listed` with the `choose` list in priority order)",
+                "{} put fewer than {} pairs of products in an order, and other orders follow them as well ({}): the model keeps {taught}. If the line packs otherwise, show it in a demonstration that orders products these disagree on, or declare it in a `demos` block (`sequence ascending`, `descending`, or `listed` with the `choose` list in priority order)",
+                cell.as_ref()
+                    .map_or("the demonstrations".to_owned(), |c| format!(
+                        "cell `{c}` keeps a rule of its own, and its demonstrations"
+                    )),
                 packwright_pipeline::teach::FEW_PAIRS,
                 rivals
                     .iter()
@@ -372,8 +383,16 @@ pub fn run(
         });
     }
     // A list read from few pairs is said once, with its rivals.
+    for (cell, rivals) in &lesson.cell_rivals {
+        warnings.push(Weakness::RuleFromFewPairs {
+            cell: Some(cell.clone()),
+            taught: lesson.rule_for(cell).clone(),
+            rivals: rivals.clone(),
+        });
+    }
     if !lesson.rivals.is_empty() {
         warnings.push(Weakness::RuleFromFewPairs {
+            cell: None,
             taught: lesson.sequence.clone(),
             rivals: lesson.rivals.clone(),
         });
