@@ -19,15 +19,21 @@ pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
         );
     }
     let total = demonstrations.len();
+    let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
     let done = AtomicUsize::new(0);
     let demos: Vec<_> = demonstrations.iter().collect();
     let logs = replay_all(world, &demos, &|| {
         let n = done.fetch_add(1, Ordering::Relaxed) + 1;
         if !args.json && (n.is_multiple_of(10) || n == total) {
-            err!("\rrecorded {n}/{total} demonstrations");
+            // One line rewritten on a terminal; a line each in a file.
+            if terminal {
+                err!("\rrecorded {n}/{total} demonstrations");
+            } else {
+                errln!("recorded {n}/{total} demonstrations");
+            }
         }
     })?;
-    if !args.json {
+    if !args.json && terminal {
         errln!();
     }
     let mut problems = Vec::new();
@@ -37,7 +43,14 @@ pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
         .map(|(i, replay)| {
             replay
                 .map_err(|why| {
-                    problems.push(format!("demonstration {i} ({}): {why}", demos[i].block))
+                    // Numbered from 1, as `train` numbers them: the line
+                    // of demonstrations.jsonl.
+                    problems.push(format!(
+                        "demonstration {} ({}; line {} of demonstrations.jsonl): {why}",
+                        i + 1,
+                        demos[i].block,
+                        i + 1
+                    ))
                 })
                 .ok()
         })
@@ -70,9 +83,8 @@ pub fn run(args: &DemonstrateArgs) -> anyhow::Result<Exit> {
             log.actions.len()
         );
         if !failed.is_empty() {
-            outln!(
-                "could not replay demonstrations {failed:?} (lines of demonstrations.jsonl, from 0)"
-            );
+            let lines: Vec<usize> = failed.iter().map(|i| i + 1).collect();
+            outln!("could not replay demonstrations {lines:?} (lines of demonstrations.jsonl)");
         }
     }
     Ok(if failed.is_empty() {
