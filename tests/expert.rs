@@ -327,3 +327,31 @@ fn a_hover_past_the_forearm_is_searched_for_a_whole_turn_round() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Helper X's demonstration the expert could not replay
+/// (tests/cells/lift_beside_tall.pack): after the first product, the
+/// second's lift in the arm's nearest shape meets a 206 mm product beside
+/// it. The stage was solved again in the contact's shape, but the way to
+/// its hover went to another solution (another shape), where the descent
+/// and the lift were solved again nearest it and failed as before. The
+/// hover is now reached in the shape the stage was solved in.
+#[test]
+fn a_stage_solved_in_the_contacts_shape_is_reached_in_it() {
+    for planner in ["expert", "rrt"] {
+        let out = packwright(&[
+            "execute",
+            "tests/cells/lift_beside_tall.pack",
+            "--order",
+            "d9",
+            "--planner",
+            planner,
+        ]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{planner}: {}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}

@@ -42,6 +42,9 @@ struct Planned {
     ceiling: f64,
     /// Microseconds its inverse kinematics took.
     solve_us: f64,
+    /// Solved in one arm shape with the rest of its stage
+    /// ([`Station::grip`]): reached in it, not at another solution.
+    in_shape: bool,
 }
 
 impl<W: World> Scripted<'_, W> {
@@ -71,6 +74,7 @@ impl<W: World> Scripted<'_, W> {
                 solved,
                 ceiling,
                 solve_us: took * 1e6,
+                in_shape: false,
             });
         }
         Ok(out)
@@ -105,6 +109,7 @@ impl<W: World> Scripted<'_, W> {
                     solved,
                     ceiling: goal.tip[2],
                     solve_us,
+                    in_shape: true,
                 })
                 .collect(),
         )
@@ -138,12 +143,14 @@ impl<W: World> Scripted<'_, W> {
             solved: above,
             ceiling: goals[0].tip[2],
             solve_us: took * 1e6,
+            in_shape: false,
         });
         plan.push(Planned {
             goal: goals[2],
             solved: release,
             ceiling: goals[1].tip[2],
             solve_us: 0.0,
+            in_shape: false,
         });
         Some(plan)
     }
@@ -246,6 +253,7 @@ impl<W: World> Scripted<'_, W> {
                 straight => straight,
             };
             let planned_joints = planned.solved.joints;
+            let in_shape = planned.in_shape && !replanned;
             let solved = if replanned {
                 self.station
                     .solve(&planned.goal, k + 1, &start, yaw, load, planned.ceiling)
@@ -255,9 +263,17 @@ impl<W: World> Scripted<'_, W> {
             // The joints alone are kept for a search: a solve's straight
             // route matched nothing if routing from `start` failed.
             let target = solved.as_ref().ok().map(|s| s.joints);
+            // A plan solved in one arm shape (`grip_stage`) is reached in
+            // it: routed to another solution of the hover (another shape),
+            // the descent and the lift were solved again nearest it, and
+            // failed as the first plan had.
             let routed = solved.and_then(|solved| {
-                self.station
-                    .route_solved(how, k + 1, start, solved, yaw, load)
+                if in_shape {
+                    self.station.route_in_shape(how, k + 1, start, solved, load)
+                } else {
+                    self.station
+                        .route_solved(how, k + 1, start, solved, yaw, load)
+                }
             });
             // The expert's last resort: where the straight motion and both
             // swings collide for every solution (a wrist over a deep box's
@@ -267,6 +283,14 @@ impl<W: World> Scripted<'_, W> {
             // not ended for a motion a search finds. If that fails too, the
             // straight motion's collision is the reason.
             let routed = match (how, routed, target) {
+                (Connect::Straight, Err(why @ Failure::WouldCollide { .. }), Some(target))
+                    if in_shape =>
+                {
+                    self.station
+                        .search(k as u64, k + 1, start, target, load)
+                        .map(|route| (target, route))
+                        .map_err(|_| why)
+                }
                 (Connect::Straight, Err(why @ Failure::WouldCollide { .. }), Some(target)) => self
                     .station
                     .search_any(k as u64, k + 1, start, target, yaw, load)

@@ -818,6 +818,28 @@ impl<'a, W: World> Station<'a, W> {
         }
     }
 
+    /// The checked commands from `from` to a solved sub-goal in its own
+    /// arm shape: the straight motion its solve checked, when that started
+    /// at `from`, else [`Station::route`] to its joints (never another
+    /// solution, as [`Station::route_solved`] may take: a plan solved in
+    /// one shape, [`Station::grip`], re-solved nearest another shape
+    /// failed as the first plan had).
+    pub fn route_in_shape(
+        &self,
+        how: Connect,
+        k: usize,
+        from: Joints,
+        solved: Solved,
+        load: Load,
+    ) -> Result<(Joints, Route), Failure> {
+        match solved.straight {
+            Some((start, route)) if start == from => Ok((solved.joints, route)),
+            _ => self
+                .route(how, k, from, solved.joints, load)
+                .map(|route| (solved.joints, route)),
+        }
+    }
+
     /// [`Station::route`] to `target`, else to another free
     /// inverse-kinematics solution of the same cup pose (nearest `from`
     /// first, joined straight or by a swing): the nearest solution can have
