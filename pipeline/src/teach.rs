@@ -1228,6 +1228,14 @@ pub(crate) mod tests {
             .collect()
     }
 
+    /// A generated block `d` of [`rule_cell`]: two of `choose` into s1
+    /// and s2, in `sequence`.
+    fn demos_block(choose: &str, sequence: &str) -> String {
+        format!(
+            "demos d for inv {{\n  choose 2 of {choose} into s1, s2\n  sequence {sequence}\n  seed 1\n}}"
+        )
+    }
+
     /// The rule of cell `c` in [`rule_cell`] with `tail`.
     fn rule_of(tail: &str) -> Result<Option<Inferred>> {
         cell_rule(&rule_cell(tail), "c")
@@ -1322,12 +1330,10 @@ inventory inv for c {{
         let inferred = rule_of(&chained).ok().flatten().expect("a rule");
         assert_eq!(inferred.rule, SequenceRule::Ascending);
         assert_eq!(inferred.guessed, Guessed::default());
-        let declared = "demos d for inv {
-  choose 2 of p2, p3 into s1, s2
-  sequence descending
-  seed 1
-}";
-        let inferred = rule_of(declared).ok().flatten().expect("a rule");
+        let inferred = rule_of(&demos_block("p2, p3", "descending"))
+            .ok()
+            .flatten()
+            .expect("a rule");
         assert_eq!(inferred.rule, SequenceRule::Descending);
         assert!(inferred.rivals.is_empty(), "{:?}", inferred.rivals);
     }
@@ -1383,12 +1389,10 @@ inventory inv for c {{
             inferred.guessed
         );
         // A declared list guesses nothing.
-        let declared = "demos d for inv {
-  choose 2 of p4, p2 into s1, s2
-  sequence listed
-  seed 1
-}";
-        let inferred = rule_of(declared).ok().flatten().expect("a rule");
+        let inferred = rule_of(&demos_block("p4, p2", "listed"))
+            .ok()
+            .flatten()
+            .expect("a rule");
         assert!(
             matches!(inferred.rule, SequenceRule::Listed(_)),
             "{:?}",
