@@ -565,6 +565,7 @@ demo right_again for ro {
 /// the rule for `up` came from both cells' demonstrations (D and E
 /// first), not up's own ascending. `few_pairs.pack`: `solo` keeps its
 /// own rule read from one pair, said as when taught alone.
+/// `guessed.pack`: each cell's guessed pairs, over its own products.
 #[test]
 fn cells_taught_together_keep_their_own_orders_and_say_so() {
     let dir = scratch("learning", "multi");
@@ -606,6 +607,21 @@ fn cells_taught_together_keep_their_own_orders_and_say_so() {
         !kinds(&borrowed).contains(&"cell_reads_otherwise".to_owned()),
         "{borrowed}"
     );
+    // Two cells on one rule read from one demonstration each: the pairs
+    // guessed are named per cell, over its own products.
+    let guessed = train("guessed");
+    for cell in ["left", "right"] {
+        let found = guessed["warnings"].as_array().and_then(|w| {
+            w.iter()
+                .find(|w| w["kind"] == "pairs_guessed" && w["cell"] == cell)
+        });
+        let found = found.unwrap_or_else(|| panic!("{cell}: {guessed}"));
+        assert_eq!(
+            (&found["ordered"], &found["pairs"]),
+            (&3.into(), &15.into()),
+            "{found}"
+        );
+    }
     let few = train("few_pairs");
     assert_eq!(few["cell_rules"]["solo"], "descending", "{few}");
     assert!(

@@ -55,6 +55,10 @@ pub struct Lesson {
     /// Other rules the demonstrations follow as well, when they show few
     /// pairs of products in order ([`Inferred::rivals`]).
     pub rivals: Vec<SequenceRule>,
+    /// With several cells: each cell on the one rule, read from
+    /// demonstrations, with the pairs of its own products that rule
+    /// orders and no demonstration does ([`guessed_in`]).
+    pub cell_guessed: Vec<(String, Guessed)>,
     /// With several cells: each cell that keeps its own rule
     /// ([`Lesson::cell_rules`]) read from few pairs, with the other rules
     /// its demonstrations follow as well ([`Inferred::rivals`]).
@@ -203,6 +207,7 @@ impl Lesson {
         let mut read_otherwise = Vec::new();
         let mut cell_rules = BTreeMap::new();
         let mut cell_rivals = Vec::new();
+        let mut cell_guessed = Vec::new();
         let Inferred {
             rule: sequence,
             exceptions,
@@ -337,7 +342,27 @@ impl Lesson {
                     read_otherwise
                         .retain(|(cell, own)| orders_otherwise(&world, cell, own, &again.rule));
                     inferred.rule = again.rule;
+                    inferred.guessed = again.guessed;
                 }
+            }
+            // Each cell on the one rule read from demonstrations (not
+            // declared): the pairs of its own products the rule orders
+            // that no demonstration of the cells on it orders (the rule's
+            // pairs over all cells would name products no inventory holds
+            // together).
+            if cells.len() > 1 && inferred.guessed != Guessed::default() {
+                let on_rule: Vec<&DemonstrationRecord> = shown
+                    .iter()
+                    .filter(|d| !cell_rules.contains_key(&d.cell))
+                    .collect();
+                cell_guessed = cells
+                    .iter()
+                    .filter(|c| !cell_rules.contains_key(*c))
+                    .filter_map(|cell| {
+                        let g = guessed_in(&world, cell, &inferred.rule, &on_rule);
+                        (!g.untaught.is_empty()).then(|| (cell.clone(), g))
+                    })
+                    .collect();
             }
             Inferred {
                 exceptions: exceptions.iter().map(|&e| ordered[e]).collect(),
@@ -374,6 +399,7 @@ impl Lesson {
             rivals,
             cell_rivals,
             guessed,
+            cell_guessed,
         })
     }
 
@@ -823,6 +849,48 @@ fn guessed(list: &[String], before: impl Fn(&str, &str) -> bool) -> Guessed {
         }
     }
     out
+}
+
+/// The pairs of `cell`'s first inventory that `rule` orders and `demos`
+/// do not, directly or through others ([`guessed`]); a direction's only
+/// when they order fewer than half of them.
+fn guessed_in(
+    world: &WorldFile,
+    cell: &str,
+    rule: &SequenceRule,
+    demos: &[&DemonstrationRecord],
+) -> Guessed {
+    let Some(inventory) = world.inventories.iter().find(|i| i.cell == cell) else {
+        return Guessed::default();
+    };
+    let names: Vec<&str> = inventory
+        .products
+        .iter()
+        .map(|p| p.product.as_str())
+        .collect();
+    let mut votes: BTreeMap<(&str, &str), usize> = BTreeMap::new();
+    for d in demos {
+        for (i, a) in d.sequence.iter().enumerate() {
+            for b in &d.sequence[i + 1..] {
+                *votes.entry((a.as_str(), b.as_str())).or_default() += 1;
+            }
+        }
+    }
+    let before = |a: &str, b: &str| {
+        votes.get(&(a, b)).copied().unwrap_or(0) > votes.get(&(b, a)).copied().unwrap_or(0)
+    };
+    let order: Vec<String> = rule
+        .chain(&names)
+        .into_iter()
+        .map(|i| names[i].to_owned())
+        .collect();
+    let g = guessed(&order, before);
+    let listed = matches!(rule, SequenceRule::Listed(_));
+    if listed || 2 * g.ordered < g.pairs {
+        g
+    } else {
+        Guessed::default()
+    }
 }
 
 /// Whether `sequence` (product names) follows `rule` in `inventory`

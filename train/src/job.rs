@@ -120,6 +120,8 @@ pub enum Weakness {
     /// demonstrations that order fewer than half of them
     /// ([`packwright_pipeline::teach::Guessed`]).
     PairsGuessed {
+        /// With several cells taught: the cell whose products these are.
+        cell: Option<String>,
         taught: packwright_interface::SequenceRule,
         /// Pairs the demonstrations order, directly or through others.
         ordered: usize,
@@ -200,6 +202,7 @@ impl std::fmt::Display for Weakness {
                     .join("; ")
             ),
             Weakness::PairsGuessed {
+                cell,
                 taught,
                 ordered,
                 pairs,
@@ -233,7 +236,9 @@ impl std::fmt::Display for Weakness {
                 };
                 write!(
                     f,
-                    "the demonstrations order {ordered} of the {pairs} pairs of products {kept}, {taught}. The model orders the other {} {how} and no demonstration showed them: {}{}. If the line packs them otherwise, show those products together in a demonstration, or declare {declare}",
+                    "{}the demonstrations order {ordered} of the {pairs} pairs of products {kept}, {taught}. The model orders the other {} {how} and no demonstration showed them: {}{}. If the line packs them otherwise, show those products together in a demonstration, or declare {declare}",
+                    cell.as_ref()
+                        .map_or(String::new(), |c| format!("cell `{c}`: ")),
                     untaught.len(),
                     shown.join("; "),
                     if more > 0 {
@@ -398,10 +403,20 @@ pub fn run(
         });
     } else if !lesson.guessed.untaught.is_empty() {
         warnings.push(Weakness::PairsGuessed {
+            cell: None,
             taught: lesson.sequence.clone(),
             ordered: lesson.guessed.ordered,
             pairs: lesson.guessed.pairs,
             untaught: lesson.guessed.untaught.clone(),
+        });
+    }
+    for (cell, g) in &lesson.cell_guessed {
+        warnings.push(Weakness::PairsGuessed {
+            cell: Some(cell.clone()),
+            taught: lesson.rule_for(cell).clone(),
+            ordered: g.ordered,
+            pairs: g.pairs,
+            untaught: g.untaught.clone(),
         });
     }
     if let Some(&first) = lesson.exceptions.first() {
@@ -569,6 +584,7 @@ mod tests {
         };
         let pair = |a: &str, b: &str| (a.to_owned(), b.to_owned());
         let w = Weakness::PairsGuessed {
+            cell: None,
             taught: list(&["a", "b", "c", "d", "e", "f"]),
             ordered: 9,
             pairs: 15,
@@ -601,6 +617,7 @@ mod tests {
     #[test]
     fn a_guessed_direction_says_the_rest_follow_it() {
         let w = Weakness::PairsGuessed {
+            cell: Some("right".to_owned()),
             taught: packwright_interface::SequenceRule::Ascending,
             ordered: 3,
             pairs: 28,
