@@ -82,34 +82,6 @@ impl RobotWorkspace {
     }
 }
 
-impl RobotWorkspace {
-    /// The way to the hover above a product of `size` at `at` from the
-    /// start pose or from over the box, which the empty cell has and the
-    /// `standing` products take away ([`Reachability::way_to_hover`]):
-    /// blocked, with the product its straight motion meets.
-    fn way_among(
-        &self,
-        m: &Model,
-        cell: usize,
-        size: [f64; 3],
-        at: [f64; 2],
-        standing: &[Standing],
-    ) -> Option<Blocked> {
-        let among = bodies(m, standing);
-        self.ask(m, cell, |r| {
-            let none = r.way_to_hover(&among, size, at)?;
-            Some(Blocked {
-                pose: match none.from {
-                    None => Pose::HoverFromStart,
-                    Some(_) => Pose::HoverFromBox,
-                },
-                by: none.by.and_then(|name| index_of(m, standing, &name)),
-            })
-        })
-        .flatten()
-    }
-}
-
 /// The standing products as the checker's bodies, named as the model
 /// names them (on the table, square).
 fn bodies(m: &Model, standing: &[Standing]) -> Vec<ProductBody> {
@@ -236,8 +208,22 @@ impl Workspace for RobotWorkspace {
         at: [f64; 2],
         standing: &[Standing],
     ) -> Option<Blocked> {
+        // The way the empty cell has and the standing products take away
+        // ([`Reachability::way_to_hover`]), with the product its straight
+        // motion meets.
         let size = m.products.get(product)?.size;
-        self.way_among(m, cell, size, at, standing)
+        let among = bodies(m, standing);
+        self.ask(m, cell, |r| {
+            let none = r.way_to_hover(&among, size, at)?;
+            Some(Blocked {
+                pose: match none.from {
+                    None => Pose::HoverFromStart,
+                    Some(_) => Pose::HoverFromBox,
+                },
+                by: none.by.and_then(|name| index_of(m, standing, &name)),
+            })
+        })
+        .flatten()
     }
 
     fn place_among(

@@ -851,6 +851,26 @@ fn guessed(list: &[String], before: impl Fn(&str, &str) -> bool) -> Guessed {
     out
 }
 
+/// How many of `sequences` put each pair of products in that order.
+fn pair_votes<'a>(
+    sequences: impl Iterator<Item = &'a [String]>,
+) -> BTreeMap<(&'a str, &'a str), usize> {
+    let mut votes = BTreeMap::new();
+    for sequence in sequences {
+        for (i, a) in sequence.iter().enumerate() {
+            for b in &sequence[i + 1..] {
+                *votes.entry((a.as_str(), b.as_str())).or_default() += 1;
+            }
+        }
+    }
+    votes
+}
+
+/// Whether more of the `votes` put `a` before `b` than after it.
+fn before_by(votes: &BTreeMap<(&str, &str), usize>, a: &str, b: &str) -> bool {
+    votes.get(&(a, b)).copied().unwrap_or(0) > votes.get(&(b, a)).copied().unwrap_or(0)
+}
+
 /// The pairs of `cell`'s first inventory that `rule` orders and `demos`
 /// do not, directly or through others ([`guessed`]); a direction's only
 /// when they order fewer than half of them.
@@ -868,17 +888,8 @@ fn guessed_in(
         .iter()
         .map(|p| p.product.as_str())
         .collect();
-    let mut votes: BTreeMap<(&str, &str), usize> = BTreeMap::new();
-    for d in demos {
-        for (i, a) in d.sequence.iter().enumerate() {
-            for b in &d.sequence[i + 1..] {
-                *votes.entry((a.as_str(), b.as_str())).or_default() += 1;
-            }
-        }
-    }
-    let before = |a: &str, b: &str| {
-        votes.get(&(a, b)).copied().unwrap_or(0) > votes.get(&(b, a)).copied().unwrap_or(0)
-    };
+    let votes = pair_votes(demos.iter().map(|d| d.sequence.as_slice()));
+    let before = |a: &str, b: &str| before_by(&votes, a, b);
     let order: Vec<String> = rule
         .chain(&names)
         .into_iter()
@@ -930,7 +941,6 @@ pub fn sequence_rule(
 ) -> Result<Inferred> {
     let mut inventories: Vec<Vec<&str>> = Vec::new();
     let mut names: Vec<&str> = Vec::new();
-    let mut votes: BTreeMap<(&str, &str), usize> = BTreeMap::new();
     for d in demos {
         let inventory = world
             .inventories
@@ -952,12 +962,8 @@ pub fn sequence_rule(
             }
         }
         inventories.push(listed);
-        for (i, a) in d.sequence.iter().enumerate() {
-            for b in &d.sequence[i + 1..] {
-                *votes.entry((a.as_str(), b.as_str())).or_default() += 1;
-            }
-        }
     }
+    let votes = pair_votes(demos.iter().map(|d| d.sequence.as_slice()));
     // Declared priorities first: the order a tie below keeps.
     let mut names: Vec<&str> = declared
         .iter()
@@ -974,9 +980,7 @@ pub fn sequence_rule(
     // The priority list: the majority's pairwise order, one product at a
     // time (the first not after any remaining one; in a cycle, the one
     // after the fewest).
-    let after = |m: &str, n: &str| {
-        votes.get(&(m, n)).copied().unwrap_or(0) > votes.get(&(n, m)).copied().unwrap_or(0)
-    };
+    let after = |m: &str, n: &str| before_by(&votes, m, n);
     // Ties (products no demonstration puts in an order) go in the order
     // of `names`.
     let priority = |names: Vec<&str>| {

@@ -14,14 +14,14 @@
 
 use super::station::{
     LIFT_VIAS, Load, MAX_CARRY_RAISES, MAX_RAISES, MIN_LIFT, READY, home_on, home_tip, lowerings,
-    raises, reach, solutions, tip_line,
+    raises, reach, solutions, swings, tip_line,
 };
 use crate::collision::{Checker, Held, ProductBody};
 use crate::expert::{self, SubGoal};
 use crate::rrt::{self, Query, RrtConfig};
 use nalgebra::{Point3, Vector3};
 use packwright_interface::outcome::{Hit, Stage};
-use packwright_interface::scene::CellScene;
+use packwright_interface::scene::{CellScene, SlotSpec};
 use packwright_interface::world::Body;
 use packwright_kinematics::{Arm, Joints};
 
@@ -181,6 +181,24 @@ impl Reachability {
         expert::picking([at[0], at[1], size[2] / 2.0], size[2], self.cell.lift)
     }
 
+    /// The expert's placing sub-goals of a product of `size` picked at
+    /// `at` into slot `slot` (`spec`).
+    fn placing_goals(
+        &self,
+        size: [f64; 3],
+        at: [f64; 2],
+        slot: usize,
+        spec: &SlotSpec,
+    ) -> [SubGoal; 3] {
+        expert::placing(
+            self.picking_goals(size, at)[2].tip,
+            expert::release_at(&self.cell, spec, size),
+            size[2],
+            expert::box_height(&self.cell, slot),
+            [self.cell.base[0], self.cell.base[1]],
+        )
+    }
+
     /// Picking a product of `size` whose centre stands at `at` (on the
     /// table, square): the first sub-goal no free solution reaches (the
     /// top face and the lift: straight from a free solution of the one
@@ -191,12 +209,7 @@ impl Reachability {
         // The lift carries the product off the table, and may be lowered
         // down to MIN_LIFT above the top face (as `Station::solve` does).
         let gripped = Held::under_cup("held", size, self.cell.suction, Vector3::zeros());
-        let standing = ProductBody {
-            name: "held".to_owned(),
-            centre: [at[0], at[1], size[2] / 2.0],
-            size,
-            yaw: 0.0,
-        };
+        let standing = picked_body(size, at);
         let lifting = self.checker.lifting(gripped, Some(&standing));
         let lowered: Vec<f64> = std::iter::once(goals[2].tip[2])
             .chain(lowerings(goals[2].tip[2], MAX_RAISES))
@@ -247,12 +260,7 @@ impl Reachability {
         at: [f64; 2],
     ) -> Option<NoWay> {
         let goals = self.picking_goals(size, at);
-        let picked = ProductBody {
-            name: "held".to_owned(),
-            centre: [at[0], at[1], size[2] / 2.0],
-            size,
-            yaw: 0.0,
-        };
+        let picked = picked_body(size, at);
         let among = self.among(standing);
         let (empty, full) = (
             self.checker.with_product(&picked),
@@ -270,12 +278,8 @@ impl Reachability {
                     .check_motion(a, b, touching.held, touching.ignore)
                     .is_none()
             };
-            let turn = hover[0] - start[0];
-            let (mut first, mut last) = (*start, *hover);
-            (first[0], first[5]) = (hover[0], first[5] + turn);
-            (last[0], last[5]) = (start[0], last[5] - turn);
             clear(start, hover)
-                || [first, last].iter().any(|via| {
+                || swings(*start, *hover).iter().any(|via| {
                     self.checker.arm().within_limits(via)
                         && checker.check(via, touching.held, touching.ignore).is_none()
                         && clear(start, via)
@@ -291,14 +295,7 @@ impl Reachability {
         // The point above each slot: the first solution free among the
         // products, nearest the start pose's shape.
         let above = |slot: usize, spec| {
-            let tip = expert::placing(
-                goals[2].tip,
-                expert::release_at(&self.cell, spec, size),
-                size[2],
-                expert::box_height(&self.cell, slot),
-                [self.cell.base[0], self.cell.base[1]],
-            )[1]
-            .tip;
+            let tip = self.placing_goals(size, at, slot, spec)[1].tip;
             solutions(&self.checker, Point3::from(tip), 0.0, &self.near)
                 .into_iter()
                 .find(|q| full.check(q, None, None).is_none())
@@ -406,14 +403,7 @@ impl Reachability {
                 meets_itself: false,
             });
         };
-        let lift = self.picking_goals(size, at)[2].tip;
-        let goals = expert::placing(
-            lift,
-            expert::release_at(&self.cell, spec, size),
-            size[2],
-            expert::box_height(&self.cell, slot),
-            [self.cell.base[0], self.cell.base[1]],
-        );
+        let goals = self.placing_goals(size, at, slot, spec);
         let held = Held::under_cup("held", size, self.cell.suction, Vector3::zeros());
         let load = Load::holding(&held);
         // Down into the slot, padded as the room beside it allows.
@@ -484,6 +474,17 @@ impl Reachability {
                         .find_map(|p| self.checker.check_motion(p, q, load.held, load.ignore))
                 })
             })
+    }
+}
+
+/// A product of `size` standing at `at` (on the table, square), as the
+/// one being picked: named `held`, as the cup will hold it.
+fn picked_body(size: [f64; 3], at: [f64; 2]) -> ProductBody {
+    ProductBody {
+        name: "held".to_owned(),
+        centre: [at[0], at[1], size[2] / 2.0],
+        size,
+        yaw: 0.0,
     }
 }
 

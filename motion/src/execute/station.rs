@@ -77,6 +77,31 @@ pub struct Solved {
     straight: Option<(Joints, Route)>,
 }
 
+impl Solved {
+    /// The joints with the straight motion the solve checked, when that
+    /// started at `from`; else the joints alone, to be routed to.
+    fn kept_from(self, from: Joints) -> Result<(Joints, Route), Joints> {
+        match self.straight {
+            Some((start, route)) if start == from => Ok((self.joints, route)),
+            _ => Err(self.joints),
+        }
+    }
+}
+
+/// The two swings from `from` to `to` that [`Station::route`] tries after
+/// the straight motion, as via points: the base turned alone first (the
+/// wrist keeping the cup's yaw), or last.
+pub(crate) fn swings(from: Joints, to: Joints) -> [Joints; 2] {
+    let turn = to[0] - from[0];
+    let mut swing_first = from;
+    swing_first[0] = to[0];
+    swing_first[5] += turn;
+    let mut swing_last = to;
+    swing_last[0] = from[0];
+    swing_last[5] -= turn;
+    [swing_first, swing_last]
+}
+
 /// One leg to send: its route, the suction switched at its end, and what
 /// it carries and may touch (owned, so that a leg can wait for the next
 /// stage's: [`Station::send_legs`]).
@@ -734,14 +759,7 @@ impl<'a, W: World> Station<'a, W> {
             Err(why @ Failure::WouldCollide { .. }) => why,
             Err(other) => return Err(other),
         };
-        let turn = to[0] - from[0];
-        let mut swing_first = from;
-        swing_first[0] = to[0];
-        swing_first[5] += turn;
-        let mut swing_last = to;
-        swing_last[0] = from[0];
-        swing_last[5] -= turn;
-        for via in [swing_first, swing_last] {
+        for via in swings(from, to) {
             if self.arm.within_limits(&via)
                 && let Ok(route) = self.checked(k, from, &[via, to], load)
             {
@@ -812,9 +830,9 @@ impl<'a, W: World> Station<'a, W> {
         yaw: f64,
         load: Load,
     ) -> Result<(Joints, Route), Failure> {
-        match solved.straight {
-            Some((start, route)) if start == from => Ok((solved.joints, route)),
-            _ => self.route_any(how, k, from, solved.joints, yaw, load),
+        match solved.kept_from(from) {
+            Ok(kept) => Ok(kept),
+            Err(joints) => self.route_any(how, k, from, joints, yaw, load),
         }
     }
 
@@ -832,11 +850,11 @@ impl<'a, W: World> Station<'a, W> {
         solved: Solved,
         load: Load,
     ) -> Result<(Joints, Route), Failure> {
-        match solved.straight {
-            Some((start, route)) if start == from => Ok((solved.joints, route)),
-            _ => self
-                .route(how, k, from, solved.joints, load)
-                .map(|route| (solved.joints, route)),
+        match solved.kept_from(from) {
+            Ok(kept) => Ok(kept),
+            Err(joints) => self
+                .route(how, k, from, joints, load)
+                .map(|route| (joints, route)),
         }
     }
 
