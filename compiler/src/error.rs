@@ -497,7 +497,7 @@ impl Error {
     /// How to fix it.
     pub fn help(&self) -> Option<String> {
         Some(match self {
-            Error::Read { reason, .. } => reason.help().into(),
+            Error::Read { reason, .. } => reason.help(),
             Error::Syntax { error, .. } => return error.help(),
             Error::UseMissing {
                 reason: Unreadable::Missing,

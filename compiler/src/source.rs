@@ -90,8 +90,8 @@ impl Unreadable {
     }
 
     /// How to fix it, where it is the file's own problem.
-    pub fn help(&self) -> &'static str {
-        match self {
+    pub fn help(&self) -> String {
+        let help: &str = match self {
             Unreadable::Missing => "check the path",
             Unreadable::Directory { compiled: true } => {
                 "name the .pack files; compiled directories are for `train` and `show`"
@@ -100,12 +100,15 @@ impl Unreadable {
             Unreadable::NotText { .. } => {
                 "save the file as UTF-8 text (in most editors: save with encoding UTF-8); a name or comment in another encoding is the usual cause"
             }
-            Unreadable::TooLarge { .. } => {
-                "a .pack file is at most 16 MiB: split it into files joined with `use`"
+            Unreadable::TooLarge { limit_mib } => {
+                return format!(
+                    "a .pack file is at most {limit_mib} MiB: split it into files joined with `use`"
+                );
             }
             Unreadable::NotAFile => "name a regular file",
             Unreadable::Other(_) => "check the path and the file's permissions",
-        }
+        };
+        help.into()
     }
 }
 
