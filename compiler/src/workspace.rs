@@ -31,7 +31,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
 
 /// A pose the robot needs: where it starts, and the six poses of a pick
-/// and place (README, "How the robot packs"): three of picking, three of
+/// and place (README, "The robot world"): three of picking, three of
 /// placing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]

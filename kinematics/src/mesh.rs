@@ -129,7 +129,7 @@ fn lines_of(text: &str, keyword: &str) -> Result<Vec<Point3<f64>>, String> {
 
 /// What one more piece must save to be worth it (m³, a 7.4 cm cube): each
 /// piece is one more shape to check. Measured with the ROS UR10's meshes
-/// on development cells (README, "A robot described as ROS describes
+/// on development cells (docs/measurements.md, "A robot described as ROS describes
 /// it"): 1e-4 cut its links into 23 shapes and a sub-goal's median
 /// planning time was 175 µs (the built-in arm's 65); 4e-4 gives 13 shapes
 /// and 109 µs, the same packages packed, and its bounds still keep the

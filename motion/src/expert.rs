@@ -1,5 +1,5 @@
 //! The scripted expert's geometry: the three sub-goals of each stage
-//! (README, "How the robot packs"), as tool-tip positions in the world
+//! (README, "The robot world"), as tool-tip positions in the world
 //! frame.
 //!
 //! Picking: above the product at hover height; on its top face (suction

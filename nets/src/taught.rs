@@ -8,7 +8,7 @@
 //! bundled model, taught cells whose products stand within 0.95 m of the
 //! base, put "above the slot" 2-3 cm off (and the release 1-2 cm) when
 //! the products stood 1.0-1.2 m out, so that a product let go over a
-//! narrow box's wall rested on it (README, "Queries beyond what was
+//! narrow box's wall rested on it (docs/measurements.md, "Queries beyond what was
 //! taught"). The expert's sub-goals over a product or a slot do not
 //! depend on where the cup comes from, and its approach point is a via
 //! point, so the nearest taught query answers them as well as the
