@@ -276,3 +276,50 @@ fn a_robot_not_in_remote_control_or_in_protective_stop_is_said_so() {
     assert!(stderr.contains("not ready: protective stop"), "{stderr}");
     assert!(stopped.record().scripts.is_empty(), "no program sent");
 }
+
+/// What `execute` would refuse at connection a dry run refuses too, and
+/// says why: a user's program paused on the pendant (the driver would
+/// abort it), the speed slider below 100%, a robot not in remote control.
+#[test]
+fn a_dry_run_refuses_what_execute_would() {
+    let start = deli().home().expect("a start pose");
+    let cases = [
+        (
+            FakeConfig {
+                runtime: packwright_ur::recipe::RuntimeState::Paused,
+                ..FakeConfig::default()
+            },
+            "a program is paused on the robot",
+        ),
+        (
+            FakeConfig {
+                speed_fraction: 0.3,
+                ..FakeConfig::default()
+            },
+            "the robot runs at 30% speed",
+        ),
+        (
+            FakeConfig {
+                remote_control: false,
+                ..FakeConfig::default()
+            },
+            "not in remote control",
+        ),
+    ];
+    for (config, said) in cases {
+        let fake = FakeController::start(FakeConfig { start, ..config }).expect("the fake starts");
+        let url = fake.url();
+        for dry in [true, false] {
+            let mut args = vec!["execute", FILE, "--order", ORDER, "--robot", &url];
+            if dry {
+                args.push("--dry-run");
+            }
+            let (code, _, stderr) = run(&args);
+            assert_eq!(code, Some(2), "dry run {dry}: {stderr}");
+            assert!(stderr.contains(said), "dry run {dry}: {stderr}");
+        }
+        let record = fake.record();
+        assert!(record.targets.is_empty(), "nothing moved");
+        assert!(record.scripts.is_empty() || !said.contains("program"));
+    }
+}

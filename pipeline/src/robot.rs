@@ -20,6 +20,7 @@ use packwright_interface::world::{Contact, Observation, World, WorldError};
 use packwright_interface::{Joints, Report, Seen, SequenceRule};
 use packwright_motion::execute::{self, Planner};
 use packwright_ur::codec::ControllerVersion;
+use packwright_ur::dashboard::Dashboard;
 use packwright_ur::products::{JsonFeed, Known, Nominal, ProductSource, ToolTip};
 use packwright_ur::recipe::RobotState;
 use packwright_ur::safety::{CommandCheck, CommandProblem, Fault, check_state};
@@ -103,7 +104,9 @@ pub struct DryRun {
 /// episode in the simulator from them, and checks the first command
 /// against the measured joints. Nothing moves; the expert and RRT-Connect
 /// handle the products in `rule`'s order. Errors: the robot cannot be
-/// reached, or is not ready (a protective stop, not running).
+/// reached, or is not ready (a protective stop, not running), or would
+/// refuse the streaming program (another program loaded and not stopped,
+/// the speed slider below 100%, not in remote control).
 pub fn dry_run(
     ep: &Episode,
     address: &RobotAddress,
@@ -113,6 +116,17 @@ pub fn dry_run(
     let (controller, state) = packwright_ur::read_state(address)?;
     if let Err(f @ (Fault::Safety(_) | Fault::Robot(_))) = check_state(&state) {
         return Err(UrError::NotReady(f).into());
+    }
+    // What `execute` would refuse at connection, asked without taking
+    // control: another program loaded, the speed slider below 100%, and
+    // (where the dashboard says so) a robot not in remote control.
+    packwright_ur::ready_to_stream(&state)?;
+    let remote = Dashboard::connect(&address.dashboard_addr(), Duration::from_secs(1))
+        .and_then(|mut d| d.is_in_remote_control())
+        .ok()
+        .flatten();
+    if remote == Some(false) {
+        return Err(UrError::ProgramNotStarted { remote }.into());
     }
     let sim = ep.simulator(state.actual_q)?;
     let mut recording = Recording {

@@ -6,7 +6,6 @@ use crate::cli::ExecuteArgs;
 use crate::commands::draw::write_executed_svg;
 use crate::fsio::FsLoader;
 use packwright_interface::outcome::{Outcome, PlannerKind, Report};
-use packwright_interface::world::World;
 use packwright_interface::{Graph, Policy, SequenceRule};
 use packwright_motion::execute::{self, Planner};
 use packwright_nets::Networks;
@@ -258,7 +257,7 @@ fn on_robot(
     errln!(
         "connected to {address} (controller {}, {:.0} Hz); streaming",
         world.controller(),
-        1.0 / world.control_period()
+        world.controller().frequency()
     );
     let report = execute::run_in_order(&mut world, &ep.arm, &ep.task, planner, sequence);
     let fault = world.close();

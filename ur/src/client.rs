@@ -9,8 +9,8 @@
 //! messages are kept for the caller, never interpreted.
 
 use crate::codec::{
-    ControllerVersion, Direction, FieldType, Framer, PROTOCOL_VERSION, Packet, TextMessage, Value,
-    decode_values, encode_values,
+    CodecError, ControllerVersion, Direction, FieldType, Framer, PROTOCOL_VERSION, Packet,
+    TextMessage, Value, decode_values, encode_values,
 };
 use crate::error::{Service, UrError};
 use crate::recipe::{OUTPUTS, RobotState};
@@ -163,7 +163,10 @@ impl Client {
         let started = Instant::now();
         loop {
             if let Some((kind, payload)) = self.framer.next_frame()? {
-                return Ok(Packet::decode(Direction::FromController, kind, &payload)?);
+                match decode_known(kind, &payload)? {
+                    Some(packet) => return Ok(packet),
+                    None => continue,
+                }
             }
             let now = Instant::now();
             if now >= deadline {
@@ -296,12 +299,15 @@ impl Client {
         let mut newest: Option<Vec<u8>> = None;
         loop {
             while let Some((kind, payload)) = self.framer.next_frame()? {
-                match Packet::decode(Direction::FromController, kind, &payload)? {
-                    Packet::Data { recipe, payload } if recipe == output.id => {
-                        newest = Some(payload)
-                    }
-                    Packet::Text(m) => self.messages.push(m),
-                    _ => {}
+                match decode_known(kind, &payload)? {
+                    None => {}
+                    Some(packet) => match packet {
+                        Packet::Data { recipe, payload } if recipe == output.id => {
+                            newest = Some(payload)
+                        }
+                        Packet::Text(m) => self.messages.push(m),
+                        _ => {}
+                    },
                 }
             }
             if let Some(payload) = newest.take() {
@@ -376,6 +382,18 @@ impl Client {
     }
 }
 
+/// A packet from the controller, `None` for a type this protocol version
+/// does not define: skipped, as the reference clients skip it (a newer
+/// controller's addition is no reason to stop the arm). A known type that
+/// does not decode is an error: the stream cannot be trusted.
+fn decode_known(kind: u8, payload: &[u8]) -> Result<Option<Packet>, UrError> {
+    match Packet::decode(Direction::FromController, kind, payload) {
+        Ok(packet) => Ok(Some(packet)),
+        Err(CodecError::UnknownType(_)) => Ok(None),
+        Err(e) => Err(e.into()),
+    }
+}
+
 /// The recipe of a setup reply, or the first refused or mistyped field.
 fn accept(
     id: u8,
@@ -447,6 +465,8 @@ mod tests {
             runtime_state: RuntimeState::Stopped,
             digital_outputs: 0,
             digital_inputs: 0,
+            speed_fraction: 1.0,
+            speed_scaling: 1.0,
         }
     }
 

@@ -364,7 +364,11 @@ impl Packet {
                             expected: "its declared text length".into(),
                         });
                     }
-                    let s = text(&tail[..n])?;
+                    // A log line, for people: a byte that is not UTF-8 (a
+                    // Latin-1 name in a program's message) is shown as
+                    // U+FFFD rather than ending the stream, as the
+                    // reference clients take its bytes.
+                    let s = String::from_utf8_lossy(&tail[..n]).into_owned();
                     rest = &tail[n..];
                     Ok(s)
                 };

@@ -1,6 +1,7 @@
 //! The crate's one error type.
 
 use crate::codec::CodecError;
+use crate::recipe::RuntimeState;
 use crate::safety::Fault;
 use std::time::Duration;
 use thiserror::Error;
@@ -85,11 +86,19 @@ pub enum UrError {
     /// said about remote control, when it could be asked.
     #[error("{}", not_started(*.remote))]
     ProgramNotStarted { remote: Option<bool> },
-    /// A program is already playing: the driver does not replace it.
+    /// A program is loaded and not stopped (playing, paused): the driver
+    /// does not replace a program it did not start.
     #[error(
-        "a program is already running on the robot: stop it (pendant, or the dashboard's `stop`) before streaming"
+        "a program is {} on the robot: stop it (pendant, or the dashboard's `stop`) before streaming; packwright does not replace a program it did not start",
+        program_state(*.state)
     )]
-    ProgramRunning,
+    ProgramRunning { state: RuntimeState },
+    /// The arm would move slower than commanded: the pendant's speed
+    /// slider (or the controller's scaling) below 100%.
+    #[error(
+        "the robot runs at {percent:.0}% speed (the pendant's speed slider, or the controller's speed scaling): packwright streams the speeds it planned, and the arm would fall behind them; set the slider to 100% (a cell's `speed` statement slows the plan itself)"
+    )]
+    SlowedDown { percent: f64 },
     /// The robot is not ready to move (its state when checked).
     #[error("the robot is not ready: {0}")]
     NotReady(Fault),
@@ -99,6 +108,16 @@ pub enum UrError {
     /// The product feed sent a line that is not a valid observation.
     #[error("bad product feed line {line}: {reason}")]
     BadFeed { line: u64, reason: String },
+}
+
+fn program_state(state: RuntimeState) -> String {
+    match state {
+        RuntimeState::Playing => "already running".into(),
+        RuntimeState::Paused => "paused".into(),
+        RuntimeState::Pausing => "pausing".into(),
+        RuntimeState::Resuming => "resuming".into(),
+        other => format!("in runtime state {other:?}"),
+    }
 }
 
 fn not_started(remote: Option<bool>) -> &'static str {

@@ -79,6 +79,15 @@ pub struct FakeConfig {
     pub vacuum_input: Option<(u32, u32)>,
     /// The digital output bits at the start.
     pub outputs: u64,
+    /// The pendant's speed slider (`target_speed_fraction`), 0-1.
+    pub speed_fraction: f64,
+    /// The program state at the start (a user's program paused on the
+    /// pendant: [`RuntimeState::Paused`]).
+    pub runtime: RuntimeState,
+    /// Every 50th data package is followed by a packet of a type RTDE v2
+    /// does not define and a text message whose bytes are not UTF-8 (a
+    /// newer controller, a program's Latin-1 message).
+    pub stray_packets: bool,
 }
 
 impl Default for FakeConfig {
@@ -102,6 +111,9 @@ impl Default for FakeConfig {
             pace: Duration::from_millis(50),
             vacuum_input: None,
             outputs: 0,
+            speed_fraction: 1.0,
+            runtime: RuntimeState::Stopped,
+            stray_packets: false,
         }
     }
 }
@@ -130,6 +142,20 @@ pub struct Record {
     pub messages: Vec<String>,
     /// Dashboard commands received.
     pub dashboard: Vec<String>,
+    /// Programs not in the form the URScript manual gives for a program
+    /// sent to the controller (`def` or `sec` in the first column, every
+    /// other line indented, `end` last): not run.
+    pub malformed_scripts: u64,
+    /// Secondary-interface connections the client reset instead of
+    /// closing, leaving unread what the controller sent (the manual: read
+    /// at least 79 bytes before closing, or the program may be discarded;
+    /// the fake discards it).
+    pub secondary_resets: u64,
+    /// Input packages in mode [`Mode::Hold`].
+    pub holds: u64,
+    /// Input packages in mode [`Mode::Stop`] while the program played and
+    /// the arm moved (a `stopj` in the middle of a motion).
+    pub stops_while_moving: u64,
     /// Digital output bits set by clients, in order of change.
     pub outputs: Vec<u64>,
 }
@@ -182,6 +208,8 @@ impl Robot {
             runtime_state: self.runtime,
             digital_outputs: self.outputs,
             digital_inputs: inputs,
+            speed_fraction: config.speed_fraction,
+            speed_scaling: 1.0,
         }
     }
 
@@ -191,7 +219,7 @@ impl Robot {
         let before = self.q;
         if self.running() {
             match self.ints[MODE_REGISTER as usize] {
-                m if m == Mode::Servo as i32 => {
+                m if m == Mode::Servo as i32 || m == Mode::Hold as i32 => {
                     let t = TARGET_REGISTER as usize;
                     self.target.copy_from_slice(&self.doubles[t..t + 6]);
                     let k = if tau <= 0.0 {
@@ -269,7 +297,14 @@ impl Robot {
         if self.outputs != before {
             self.record.outputs.push(self.outputs);
         }
-        if self.ints[MODE_REGISTER as usize] == Mode::Servo as i32 {
+        let mode = self.ints[MODE_REGISTER as usize];
+        if mode == Mode::Hold as i32 {
+            self.record.holds += 1;
+        }
+        if mode == Mode::Stop as i32 && self.running() && self.qd.iter().any(|v| v.abs() > 0.05) {
+            self.record.stops_while_moving += 1;
+        }
+        if mode == Mode::Servo as i32 {
             let t = TARGET_REGISTER as usize;
             let mut q = [0.0; 6];
             q.copy_from_slice(&self.doubles[t..t + 6]);
@@ -304,6 +339,10 @@ impl Robot {
     /// Starts a program sent to the secondary interface.
     fn run(&mut self, script: &str, remote: bool) {
         self.record.scripts.push(script.to_string());
+        if !documented_form(script) {
+            self.record.malformed_scripts += 1;
+            return;
+        }
         if !remote || !script.contains("servoj(") {
             return;
         }
@@ -314,6 +353,23 @@ impl Robot {
             self.runtime = RuntimeState::Playing;
         }
     }
+}
+
+/// Whether `script` has the form the URScript manual ("Connecting to
+/// URControl") gives a program sent to the controller: its first line
+/// starts with `def ` or `sec ` in the first column, its last line is
+/// `end`, and every line between is indented (or empty).
+fn documented_form(script: &str) -> bool {
+    let lines: Vec<&str> = script.trim_end().lines().collect();
+    let (Some(first), Some(last)) = (lines.first(), lines.last()) else {
+        return false;
+    };
+    let inner = &lines[1..lines.len() - 1];
+    (first.starts_with("def ") || first.starts_with("sec "))
+        && *last == "end"
+        && inner
+            .iter()
+            .all(|l| l.trim().is_empty() || l.starts_with([' ', '\t']))
 }
 
 /// The register and frequency of `rtde_set_watchdog("input_int_register_N",
@@ -369,7 +425,7 @@ impl FakeController {
             target: config.start,
             robot_mode: config.robot_mode,
             safety_mode: config.safety_mode,
-            runtime: RuntimeState::Stopped,
+            runtime: config.runtime,
             ints: [0; 48],
             doubles: [0.0; 48],
             outputs: config.outputs,
@@ -687,6 +743,13 @@ fn stream_data(
                 return Streamed::Closed;
             };
             held.extend(p);
+            if config.stray_packets && n.is_multiple_of(50) {
+                // A packet of a type v2 does not define, then a text
+                // message with a Latin-1 byte (size, `M`, message length
+                // and bytes, source length and bytes, level).
+                held.extend([0, 5, b'Z', 1, 2]);
+                held.extend([0, 11, b'M', 4, b'c', b'a', 0xe9, b'!', 1, b'P', 2]);
+            }
             // Every seventh package waits to go with the next one.
             if !(config.fragment && n.is_multiple_of(7)) {
                 if write(stream, &held, config.fragment).is_err() {
@@ -740,19 +803,48 @@ fn stream_data(
 /// The secondary interface: a program is the text a client sends.
 fn serve_secondary(inner: &Inner, mut stream: TcpStream) {
     let _ = stream.set_read_timeout(Some(Duration::from_millis(200)));
+    // A controller's primary interface greets every client with its
+    // version message (a package of the primary protocol: size, type 20,
+    // the version's fields); 96 bytes here.
+    let mut greeting = vec![0u8; PRIMARY_GREETING];
+    greeting[..4].copy_from_slice(&(PRIMARY_GREETING as u32).to_be_bytes());
+    greeting[4] = 20;
+    if stream.write_all(&greeting).is_err() {
+        return;
+    }
     let mut text = Vec::new();
     let mut buf = [0u8; 4096];
     let started = Instant::now();
+    let mut reset = false;
     while started.elapsed() < Duration::from_secs(2) && text.len() < 1 << 20 {
         match stream.read(&mut buf) {
             Ok(0) => break,
             Ok(n) => text.extend_from_slice(&buf[..n]),
+            Err(e) if e.kind() == ErrorKind::ConnectionReset => {
+                reset = true;
+                break;
+            }
+            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {
+                break;
+            }
             Err(_) => break,
         }
     }
     let script = String::from_utf8_lossy(&text).into_owned();
-    inner.robot().run(&script, inner.config.remote_control);
+    let mut robot = inner.robot();
+    if reset {
+        // Closed without reading what the controller sent: the manual's
+        // warning is that the program may be discarded. This fake does.
+        robot.record.secondary_resets += 1;
+        robot.record.scripts.push(script);
+        return;
+    }
+    robot.run(&script, inner.config.remote_control);
 }
+
+/// The bytes of the fake's greeting on the secondary interface (a
+/// client must read at least 79 before closing).
+const PRIMARY_GREETING: usize = 96;
 
 /// The dashboard server.
 fn serve_dashboard(inner: &Inner, stream: TcpStream) {

@@ -34,4 +34,4 @@ pub use address::RobotAddress;
 pub use error::UrError;
 pub use products::ProductSource;
 pub use safety::Fault;
-pub use world::{Settings, SuctionSensor, Ur10World, read_state};
+pub use world::{FULL_SPEED, Settings, SuctionSensor, Ur10World, read_state, ready_to_stream};

@@ -29,10 +29,16 @@ pub enum Mode {
     Servo = 1,
     /// Leave the loop: the program ends.
     Exit = 2,
+    /// `servoj` to the joint targets, which are the last target again:
+    /// the planner's next one is late (a cycle the computer missed), or
+    /// it thinks between motions. The arm holds its course to the last
+    /// target instead of a `stopj` in the middle of a motion; told apart
+    /// from [`Mode::Servo`] only so that a log can count them.
+    Hold = 3,
 }
 
 /// The output fields, in the order of [`RobotState::from_values`].
-pub const OUTPUTS: [(&str, FieldType); 9] = [
+pub const OUTPUTS: [(&str, FieldType); 11] = [
     ("timestamp", FieldType::Double),
     ("actual_q", FieldType::Vector6d),
     ("actual_qd", FieldType::Vector6d),
@@ -42,6 +48,8 @@ pub const OUTPUTS: [(&str, FieldType); 9] = [
     ("runtime_state", FieldType::Uint32),
     ("actual_digital_output_bits", FieldType::Uint64),
     ("actual_digital_input_bits", FieldType::Uint64),
+    ("target_speed_fraction", FieldType::Double),
+    ("speed_scaling", FieldType::Double),
 ];
 
 /// A digital output of the controller (the suction valve).
@@ -153,7 +161,7 @@ pub fn type_of(name: &str) -> Option<FieldType> {
         | "configurable_digital_output"
         | "tool_digital_output_mask"
         | "tool_digital_output" => Some(FieldType::Uint8),
-        "speed_slider_fraction" | "target_speed_fraction" => Some(FieldType::Double),
+        "speed_slider_fraction" => Some(FieldType::Double),
         "actual_TCP_pose" | "target_TCP_pose" | "target_qd" => Some(FieldType::Vector6d),
         "robot_status_bits" | "safety_status_bits" => Some(FieldType::Uint32),
         _ => None,
@@ -326,9 +334,21 @@ pub struct RobotState {
     pub runtime_state: RuntimeState,
     pub digital_outputs: u64,
     pub digital_inputs: u64,
+    /// `target_speed_fraction`: the pendant's speed slider, 0-1.
+    pub speed_fraction: f64,
+    /// `speed_scaling`: how much the controller's trajectory limiter slows
+    /// the motion, 0-1 (Reduced mode's limits, for one).
+    pub speed_scaling: f64,
 }
 
 impl RobotState {
+    /// The fraction of the commanded speed the arm moves at: the slider
+    /// times the controller's scaling. packwright streams the speeds it
+    /// planned, so below 1 the arm falls behind them.
+    pub fn speed(&self) -> f64 {
+        self.speed_fraction * self.speed_scaling
+    }
+
     /// The state from values in the order and types of [`OUTPUTS`].
     pub fn from_values(v: &[Value]) -> Result<RobotState, CodecError> {
         let types: Vec<FieldType> = OUTPUTS.iter().map(|(_, t)| *t).collect();
@@ -373,6 +393,8 @@ impl RobotState {
             runtime_state: RuntimeState::from_code(runtime),
             digital_outputs: bits(7)?,
             digital_inputs: bits(8)?,
+            speed_fraction: double(9)?,
+            speed_scaling: double(10)?,
         })
     }
 
@@ -389,6 +411,8 @@ impl RobotState {
             Value::Uint32(self.runtime_state.code()),
             Value::Uint64(self.digital_outputs),
             Value::Uint64(self.digital_inputs),
+            Value::Double(self.speed_fraction),
+            Value::Double(self.speed_scaling),
         ]
     }
 }
@@ -410,6 +434,8 @@ mod tests {
             runtime_state: RuntimeState::Playing,
             digital_outputs: 0b100,
             digital_inputs: 1 << 9,
+            speed_fraction: 0.3,
+            speed_scaling: 1.0,
         };
         let types: Vec<FieldType> = OUTPUTS.iter().map(|(_, t)| *t).collect();
         let bytes = encode_values(&types, &s.to_values()).unwrap();

@@ -27,6 +27,14 @@ pub enum Fault {
     Stalled { waited_s: f64 },
     /// A target failed the check; it was not sent.
     Rejected(CommandProblem),
+    /// A target was too far from the measured joints while the
+    /// controller moved the arm at `percent` of the speed commanded (the
+    /// pendant's speed slider, or Reduced mode's limits): it fell behind
+    /// the plan. Not sent.
+    FellBehind {
+        problem: CommandProblem,
+        percent: f64,
+    },
 }
 
 impl Fault {
@@ -47,7 +55,7 @@ impl Fault {
             Fault::Program(_) => StopReason::ProgramNotPlaying,
             Fault::ConnectionLost => StopReason::ConnectionLost,
             Fault::Stalled { .. } => StopReason::StalledStream,
-            Fault::Rejected(_) => StopReason::CommandRejected,
+            Fault::Rejected(_) | Fault::FellBehind { .. } => StopReason::CommandRejected,
         }
     }
 
@@ -81,6 +89,10 @@ impl std::fmt::Display for Fault {
                 waited_s * 1000.0
             ),
             Fault::Rejected(p) => write!(f, "command not sent: {p}"),
+            Fault::FellBehind { problem, percent } => write!(
+                f,
+                "command not sent: {problem}: the controller moves the arm at {percent:.0}% of the commanded speed (the pendant's speed slider, or Reduced mode's limits), so it fell behind the plan; set the slider to 100% (a cell's `speed` statement slows the plan itself)"
+            ),
         }
     }
 }
@@ -263,6 +275,8 @@ mod tests {
             runtime_state: RuntimeState::Playing,
             digital_outputs: 0,
             digital_inputs: 0,
+            speed_fraction: 1.0,
+            speed_scaling: 1.0,
         }
     }
 

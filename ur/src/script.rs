@@ -1,10 +1,14 @@
 //! The URScript program the driver sends over the secondary interface: it
 //! arms the RTDE watchdog on the sequence register and, every cycle,
 //! `servoj`s to the joint targets in the double registers while the mode
-//! register says servo, else `stopj`s; mode exit ends it.
+//! register says servo or hold, else `stopj`s; mode exit ends it.
 //!
-//! Guarantee: the text depends only on [`Program`]'s fields and the
-//! register constants of [`crate::recipe`] (a golden file pins it).
+//! Guarantees: the text depends only on [`Program`]'s fields and the
+//! register constants of [`crate::recipe`] (a golden file pins it); it
+//! has the form the URScript manual ("Connecting to URControl") gives a
+//! program sent to the controller: one `def` in the first column, every
+//! other line indented, `end` last (the controller runs it as sent; no
+//! call of it follows, as the reference clients send none).
 
 use crate::recipe::{MODE_REGISTER, Mode, SEQUENCE_REGISTER, TARGET_REGISTER};
 
@@ -46,13 +50,13 @@ impl Program {
         format!(
             "def packwright_stream():
   # packwright: streams joint targets from RTDE input registers.
-  # int {seq}: sequence number (watched), int {mode}: mode ({servo} servoj, {exit} exit, else stopj),
+  # int {seq}: sequence number (watched), int {mode}: mode ({servo} servoj, {hold} servoj to the same targets, {exit} exit, else stopj),
   # double {t0}-{t5}: joint targets (rad).
   textmsg(\"packwright: streaming started\")
   rtde_set_watchdog(\"input_int_register_{seq}\", {hz:.1}, \"stop\")
   while True:
     mode = read_input_integer_register({mode})
-    if mode == {servo}:
+    if mode == {servo} or mode == {hold}:
       q = [{q}]
       servoj(q, 0, 0, {period:.4}, {lookahead:.3}, {gain:.0})
     elif mode == {exit}:
@@ -65,11 +69,11 @@ impl Program {
   stopj({decel:.2})
   textmsg(\"packwright: streaming ended\")
 end
-packwright_stream()
 ",
             seq = SEQUENCE_REGISTER,
             mode = MODE_REGISTER,
             servo = Mode::Servo as i32,
+            hold = Mode::Hold as i32,
             exit = Mode::Exit as i32,
             t0 = TARGET_REGISTER,
             t5 = TARGET_REGISTER + 5,
@@ -90,6 +94,22 @@ mod tests {
     #[test]
     fn the_program_sent_to_an_e_series() {
         insta::assert_snapshot!(Program::for_period(0.002).render());
+    }
+
+    /// The manual's form: the last line is `end`, every line but the
+    /// first and the last is indented (a trailing call of the function,
+    /// as once sent, is not a program a controller is documented to run).
+    #[test]
+    fn the_program_has_the_documented_form() {
+        let text = Program::for_period(0.002).render();
+        let lines: Vec<&str> = text.trim_end().lines().collect();
+        assert!(lines[0].starts_with("def "));
+        assert_eq!(lines.last(), Some(&"end"));
+        assert!(
+            lines[1..lines.len() - 1]
+                .iter()
+                .all(|l| l.starts_with("  "))
+        );
     }
 
     #[test]

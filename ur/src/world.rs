@@ -6,9 +6,11 @@
 //! play. A streaming thread then answers every data package with one
 //! input package (robot-paced), with a new sequence number: the command
 //! [`World::step`] handed over (mode servo) or, when none came within half
-//! a period, a hold (mode stop). So the controller's watchdog sees the
-//! computer alive while it plans, and stops the arm when the process
-//! dies.
+//! a period, a hold: the last target again (mode hold: a late cycle in
+//! the middle of a motion delays it by a cycle rather than putting a
+//! `stopj` into it), or mode stop before the first target. So the
+//! controller's watchdog sees the computer alive while it plans, and
+//! stops the arm when the process dies.
 //!
 //! Guarantees: every target is checked ([`CommandCheck`]) before it is
 //! sent; the first fault ([`Fault`]: the safety mode not normal or
@@ -28,10 +30,11 @@ use crate::products::ProductSource;
 use crate::recipe::{
     DigitalOutput, Mode, RobotState, RuntimeState, input_names, input_types, input_values,
 };
-use crate::safety::{CommandCheck, Fault, Latch, check_state};
+use crate::safety::{CommandCheck, CommandProblem, Fault, Latch, check_state};
 use crate::script::Program;
 use packwright_interface::world::{Contact, Observation, World, WorldError};
 use packwright_interface::{DOF, Joints, Limits};
+use std::io::Read;
 use std::io::Write;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
@@ -180,10 +183,11 @@ impl Ur10World {
             let _ = client.pause();
             return Err(UrError::NotReady(f));
         }
-        // Only a program that starts after ours was sent is ours.
-        if state.runtime_state == RuntimeState::Playing {
+        // Only a program that starts after ours was sent is ours; the
+        // arm must move at the speeds planned.
+        if let Err(e) = ready_to_stream(&state) {
             let _ = client.pause();
-            return Err(UrError::ProgramRunning);
+            return Err(e);
         }
         // The suction stays as it is (a product held at connection is not
         // dropped) until the caller switches it.
@@ -251,6 +255,7 @@ impl Ur10World {
             suction: settings.suction,
             sequence,
             previous: state.actual_q,
+            servoing: false,
             stall,
             period,
         };
@@ -329,6 +334,31 @@ impl Drop for Ur10World {
     }
 }
 
+/// The arm's speed (the slider times the controller's scaling) below
+/// which a run is refused: packwright streams the speeds it planned.
+pub const FULL_SPEED: f64 = 0.99;
+
+/// Whether a robot in `state` may be given the streaming program: no
+/// program of someone else's loaded and not stopped (playing, paused: the
+/// driver would abort it), and the arm moving at the speeds planned (the
+/// pendant's speed slider at 100%). Asked at connection and by dry runs.
+pub fn ready_to_stream(state: &RobotState) -> Result<(), UrError> {
+    if !matches!(
+        state.runtime_state,
+        RuntimeState::Stopped | RuntimeState::Stopping
+    ) {
+        return Err(UrError::ProgramRunning {
+            state: state.runtime_state,
+        });
+    }
+    if state.speed() < FULL_SPEED {
+        return Err(UrError::SlowedDown {
+            percent: state.speed() * 100.0,
+        });
+    }
+    Ok(())
+}
+
 /// The controller's version and one state of the robot, read without
 /// taking control: an output recipe only, no input recipe, no program
 /// (for dry runs). The robot is not checked; see [`check_state`].
@@ -342,19 +372,43 @@ pub fn read_state(address: &RobotAddress) -> Result<(ControllerVersion, RobotSta
     Ok((controller, state))
 }
 
-/// Sends the program text to the secondary interface.
+/// What the URScript manual asks a client to read from the secondary
+/// interface before closing it ("Connecting to URControl": at least 79
+/// bytes, or the program sent may be discarded before it runs).
+const READ_BEFORE_CLOSING: usize = 79;
+
+/// Sends the program text to the secondary interface, then reads what the
+/// controller greets a client with (its version message, then robot
+/// state), [`READ_BEFORE_CLOSING`] bytes at least, for at most a second,
+/// before closing.
 fn send_program(address: &RobotAddress, text: &str) -> Result<(), UrError> {
     let mut s = connect(
         &address.secondary_addr(),
         Service::Secondary,
         Duration::from_secs(2),
     )?;
+    let io = |source| UrError::Io {
+        service: Service::Secondary,
+        cause: source,
+    };
     s.write_all(text.as_bytes())
         .and_then(|_| s.flush())
-        .map_err(|source| UrError::Io {
-            service: Service::Secondary,
-            cause: source,
-        })
+        .map_err(io)?;
+    let deadline = Instant::now() + Duration::from_secs(1);
+    let mut read = 0;
+    let mut buf = [0u8; 4096];
+    while read < READ_BEFORE_CLOSING {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() || s.set_read_timeout(Some(left)).is_err() {
+            break;
+        }
+        match s.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => read += n,
+            Err(_) => break,
+        }
+    }
+    Ok(())
 }
 
 fn read_suction(sensor: SuctionSensor, output: DigitalOutput, s: &RobotState) -> bool {
@@ -464,6 +518,20 @@ impl World for Ur10World {
     }
 }
 
+/// The fault of a target that failed its check with the robot in
+/// `state`: a target too far from the measured joints while the
+/// controller slows the arm (the slider moved during the run, Reduced
+/// mode's limits) says so.
+fn fell_behind(problem: CommandProblem, state: &RobotState) -> Fault {
+    match problem {
+        CommandProblem::FarFromMeasured { .. } if state.speed() < FULL_SPEED => Fault::FellBehind {
+            problem,
+            percent: state.speed() * 100.0,
+        },
+        _ => Fault::Rejected(problem),
+    }
+}
+
 /// The streaming thread's state.
 struct Streamer {
     client: Client,
@@ -473,6 +541,8 @@ struct Streamer {
     sequence: i32,
     /// The last target sent (the measured joints before the first).
     previous: Joints,
+    /// Whether a target was sent: holds are then the last target again.
+    servoing: bool,
     stall: Duration,
     period: f64,
 }
@@ -553,14 +623,16 @@ impl Streamer {
             let on = s.suction;
             drop(s);
             let (mode, target) = match command {
-                Some((_, Some(q))) => {
-                    if let Err(p) = self.check.check(&q, &self.previous, &state.actual_q) {
-                        return Some(Fault::Rejected(p));
-                    }
-                    (Mode::Servo, q)
-                }
+                Some((_, Some(q))) => (Mode::Servo, q),
+                // Once servoing, a hold is the last target again.
+                _ if self.servoing => (Mode::Hold, self.previous),
                 _ => (Mode::Stop, self.previous),
             };
+            if mode != Mode::Stop
+                && let Err(p) = self.check.check(&target, &self.previous, &state.actual_q)
+            {
+                return Some(fell_behind(p, &state));
+            }
             self.sequence = self.sequence.wrapping_add(1);
             let values = input_values(self.sequence, mode, &target, self.suction, on);
             if self.client.send(&values).is_err() {
@@ -568,6 +640,7 @@ impl Streamer {
             }
             if mode == Mode::Servo {
                 self.previous = target;
+                self.servoing = true;
             }
             let mut s = lock(&self.sync);
             if mode == Mode::Servo {

@@ -110,6 +110,83 @@ fn streams_targets_one_per_cycle_and_mirrors_the_suction() {
     assert_eq!(record.scripts.len(), 1);
     assert!(record.scripts[0].contains("servoj(q, 0, 0, 0.0020"));
     assert!(!record.watchdog_tripped);
+    // The program in the manual's form, sent and the greeting read
+    // before the connection closed.
+    assert_eq!(record.malformed_scripts, 0);
+    assert_eq!(record.secondary_resets, 0);
+}
+
+/// A planner cycle that comes late in the middle of a motion (the
+/// computer busy for 10 ms) holds the arm's course to the last target
+/// (mode hold), never a `stopj` into the motion; the targets are the
+/// ones sent, in order.
+#[test]
+fn a_late_cycle_mid_motion_holds_the_course() {
+    let fake = FakeController::start(FakeConfig::default()).unwrap();
+    let mut world = connect(&fake);
+    let start = world.observe().joints;
+    let targets = ramp(start, 200);
+    assert_eq!(send(&mut world, &targets[..100]).1, None);
+    std::thread::sleep(Duration::from_millis(10));
+    assert_eq!(send(&mut world, &targets[100..]).1, None);
+    assert_eq!(world.close(), None);
+    let record = fake.record();
+    assert_eq!(record.targets, targets);
+    assert!(record.holds > 0, "the late cycles were holds");
+    assert_eq!(record.stops_while_moving, 0, "no stopj mid-motion");
+}
+
+/// A packet of a type this protocol version does not define, and a text
+/// message that is not UTF-8, are skipped: the motion goes on.
+#[test]
+fn stray_packets_do_not_end_the_stream() {
+    let fake = FakeController::start(FakeConfig {
+        stray_packets: true,
+        ..FakeConfig::default()
+    })
+    .unwrap();
+    let mut world = connect(&fake);
+    let start = world.observe().joints;
+    let targets = ramp(start, 300);
+    assert_eq!(send(&mut world, &targets).1, None);
+    assert_eq!(world.close(), None);
+    assert_eq!(fake.record().targets, targets);
+}
+
+/// A user's program paused on the pendant is not replaced (the driver's
+/// program would abort it), and a speed slider below 100% is refused at
+/// connection (the arm would fall behind the planned speeds): both named,
+/// no program sent.
+#[test]
+fn a_paused_program_or_a_slowed_arm_is_refused_at_connection() {
+    let fake = FakeController::start(FakeConfig {
+        runtime: RuntimeState::Paused,
+        ..FakeConfig::default()
+    })
+    .unwrap();
+    let e = Ur10World::connect(&settings(&fake), Box::new(NoProducts)).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            UrError::ProgramRunning {
+                state: RuntimeState::Paused
+            }
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().contains("a program is paused"), "{e}");
+    assert!(fake.record().scripts.is_empty());
+    let fake = FakeController::start(FakeConfig {
+        speed_fraction: 0.5,
+        ..FakeConfig::default()
+    })
+    .unwrap();
+    let e = Ur10World::connect(&settings(&fake), Box::new(NoProducts)).unwrap_err();
+    let UrError::SlowedDown { percent } = e else {
+        panic!("{e}");
+    };
+    assert!((percent - 50.0).abs() < 1e-9);
+    assert!(fake.record().scripts.is_empty());
 }
 
 #[test]
@@ -480,7 +557,15 @@ fn a_program_already_playing_is_not_replaced() {
     let world = connect(&fake);
     // A second driver while the first one's program plays.
     let e = Ur10World::connect(&settings(&fake), Box::new(NoProducts)).unwrap_err();
-    assert!(matches!(e, UrError::ProgramRunning), "{e}");
+    assert!(
+        matches!(
+            e,
+            UrError::ProgramRunning {
+                state: RuntimeState::Playing
+            }
+        ),
+        "{e}"
+    );
     assert_eq!(fake.record().scripts.len(), 1);
     // The refused driver has gone; the first one's program still plays,
     // fed by it (the fake's clock once ran on for the one that left, and
