@@ -86,6 +86,11 @@ pub struct DemoBlockRecord {
     /// their bytes are as before).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub priority: Vec<String>,
+    /// A `demos` block with `sequence descending` (absent when false): the
+    /// direction it declares, which demonstrations of one product each
+    /// cannot show.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub descending: bool,
 }
 
 /// A product and where it is, `[x, y, z]` in metres (z = centre height).

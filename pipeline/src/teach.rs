@@ -236,13 +236,13 @@ impl Lesson {
                     .collect()
             };
             let declared = declared_in(&|_| true);
-            // The blocks that declared `sequence ascending` or
-            // `descending`.
-            let directed: BTreeSet<&str> = manifest
+            // The blocks that declared `sequence ascending` (or nothing:
+            // the default) or `descending`, with the direction.
+            let directed: BTreeMap<&str, SequenceRule> = manifest
                 .demo_blocks
                 .iter()
                 .filter(|b| b.kind == "demos" && b.priority.is_empty() && !b.any_order)
-                .map(|b| b.name.as_str())
+                .map(|b| (b.name.as_str(), direction(b.descending)))
                 .collect();
             // Each cell's own demonstrations, read alone (indices into
             // `shown`, and the rule they follow).
@@ -764,14 +764,23 @@ fn cell_rule_among(
                 .collect()
         })
         .collect();
-    let directed: BTreeSet<&str> = compiled
+    let directed: BTreeMap<&str, SequenceRule> = compiled
         .expanded
         .blocks
         .iter()
         .filter(|b| b.kind == "demos" && b.priority.is_empty() && !b.any_order)
-        .map(|b| b.name.as_str())
+        .map(|b| (b.name.as_str(), direction(b.descending)))
         .collect();
     sequence_rule(world, &demos, &declared, &directed).map(Some)
+}
+
+/// The direction a `demos` block declares.
+fn direction(descending: bool) -> SequenceRule {
+    if descending {
+        SequenceRule::Descending
+    } else {
+        SequenceRule::Ascending
+    }
 }
 
 /// W005 for every cell of a clean compilation whose demonstrations (but
@@ -937,7 +946,7 @@ pub fn sequence_rule(
     world: &WorldFile,
     demos: &[DemonstrationRecord],
     declared: &[Vec<String>],
-    directed: &BTreeSet<&str>,
+    directed: &BTreeMap<&str, SequenceRule>,
 ) -> Result<Inferred> {
     let mut inventories: Vec<Vec<&str>> = Vec::new();
     let mut names: Vec<&str> = Vec::new();
@@ -1010,21 +1019,25 @@ pub fn sequence_rule(
             .map(|(k, _)| k)
             .collect()
     };
-    // The direction the directed blocks declared: the one every
-    // demonstration of theirs follows (each follows its own block's by
-    // construction), when they agree on one.
-    let directed_demos: Vec<usize> = (0..demos.len())
-        .filter(|&k| directed.contains(demos[k].block.as_str()))
-        .collect();
-    let mut directions = [SequenceRule::Ascending, SequenceRule::Descending]
-        .into_iter()
-        .filter(|rule| {
-            !directed_demos.is_empty()
-                && directed_demos
-                    .iter()
-                    .all(|&k| follows(rule, &inventories[k], &demos[k].sequence))
-        });
-    if let (Some(rule), None) = (directions.next(), directions.next()) {
+    // The direction the directed blocks declared, when they agree on one:
+    // each demonstration of two products or more follows its block's by
+    // construction; one of a single product follows both, so only a
+    // block that wrote `sequence descending` says which (a line taught
+    // one product at a time, `sequence descending`, was packed
+    // ascending); ascending is also what a block that wrote nothing gets,
+    // so one product of such a block says nothing.
+    let mut directions: Vec<&SequenceRule> = Vec::new();
+    for (k, d) in demos.iter().enumerate() {
+        let Some(rule) = directed.get(d.block.as_str()) else {
+            continue;
+        };
+        let shown = d.sequence.len() > 1 && follows(rule, &inventories[k], &d.sequence);
+        if (shown || *rule == SequenceRule::Descending) && !directions.contains(&rule) {
+            directions.push(rule);
+        }
+    }
+    if let [rule] = directions[..] {
+        let rule = rule.clone();
         let exceptions = breaking(&rule);
         if explains_majority(demos.len() - exceptions.len(), demos.len()) {
             return Ok(Inferred {
@@ -1192,6 +1205,69 @@ pub(crate) mod tests {
         assert_eq!(taught(SequenceRule::Descending), ["d", "c", "a"]);
         let listed = SequenceRule::Listed(["d", "a"].map(String::from).to_vec());
         assert_eq!(taught(listed), ["d", "a", "c"]);
+    }
+
+    /// A `demos` block that moves one product per demonstration shows no
+    /// order: `sequence descending` written on it is the rule (it was
+    /// read as ascending, the inventory's order); one that wrote nothing
+    /// (ascending by default) says nothing, and a hand-written
+    /// demonstration of two products decides.
+    #[test]
+    fn a_direction_declared_on_single_product_demonstrations_is_the_rule() {
+        use packwright_compiler::artifact::{At, InventoryRecord};
+        let world = WorldFile {
+            schema: "test".into(),
+            version: 0,
+            cells: Vec::new(),
+            products: Vec::new(),
+            inventories: vec![InventoryRecord {
+                name: "inv".into(),
+                cell: "c".into(),
+                products: ["a", "b", "c"]
+                    .map(|p| At {
+                        product: p.into(),
+                        at: [0.0; 3],
+                    })
+                    .to_vec(),
+            }],
+            orders: Vec::new(),
+        };
+        let demo = |block: &str, sequence: &[&str]| DemonstrationRecord {
+            block: block.into(),
+            cell: "c".into(),
+            inventory: "inv".into(),
+            assignment: Vec::new(),
+            sequence: sequence.iter().map(|s| s.to_string()).collect(),
+            human_packed: Vec::new(),
+            missing: Vec::new(),
+            start: Vec::new(),
+            first_sample: 0,
+            samples: 0,
+        };
+        let singles: Vec<DemonstrationRecord> =
+            ["a", "b", "c"].iter().map(|p| demo("one", &[p])).collect();
+        let rule = |demos: &[DemonstrationRecord], declared: SequenceRule| {
+            let directed = BTreeMap::from([("one", declared)]);
+            sequence_rule(&world, demos, &[], &directed)
+                .map(|i| i.rule)
+                .ok()
+        };
+        assert_eq!(
+            rule(&singles, SequenceRule::Descending),
+            Some(SequenceRule::Descending)
+        );
+        assert_eq!(
+            rule(&singles, SequenceRule::Ascending),
+            Some(SequenceRule::Ascending)
+        );
+        // With nothing written, a hand-written demonstration's order decides.
+        let mut shown = singles.clone();
+        shown.push(demo("by_hand", &["c", "a"]));
+        shown.push(demo("by_hand", &["b", "a"]));
+        assert_eq!(
+            rule(&shown, SequenceRule::Ascending),
+            Some(SequenceRule::Descending)
+        );
     }
 
     /// A cell keeps its own rule where its demonstrations break the joint

@@ -323,6 +323,7 @@ fn manifest(sources: &SourceMap, m: &Model, ex: &Expanded, shape: Shape) -> Mani
             demonstrations: b.demos,
             samples: 2 * b.handled,
             any_order: b.any_order,
+            descending: b.descending,
             priority: b
                 .priority
                 .iter()

@@ -100,6 +100,9 @@ pub struct DemoBlock {
     /// also orders the products no demonstration shows together; empty
     /// for every other block.
     pub priority: Vec<usize>,
+    /// A `demos` block with `sequence descending`: the direction it
+    /// declares, which its demonstrations of one product each cannot show.
+    pub descending: bool,
 }
 
 #[derive(Debug, Clone)]
@@ -158,6 +161,7 @@ pub fn expand(m: &Model) -> Result<Expanded, Vec<Error>> {
             handled: d.sequence.len(),
             most_present: m.inventories[order.inventory].entries.len(),
             any_order: false,
+            descending: false,
             priority: Vec::new(),
         });
     }
@@ -342,6 +346,7 @@ fn demo_set(m: &Model, index: usize, d: &DemosDef, first_demo: usize) -> Result<
         handled: 0,
         most_present: 0,
         any_order: d.sequence == packwright_grammar::ast::SequenceMode::Random,
+        descending: d.sequence == packwright_grammar::ast::SequenceMode::Descending,
         priority: if d.sequence == packwright_grammar::ast::SequenceMode::Listed {
             c.entries.clone()
         } else {
