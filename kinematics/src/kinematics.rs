@@ -36,6 +36,9 @@ pub const IK_TOLERANCE: f64 = 1e-9;
 /// the solutions are exact to about 1e-9 rad, and two branches are this
 /// close only at a singular pose, where either is right.
 const BRANCH_TOLERANCE: f64 = 1e-12;
+/// [`BRANCH_TOLERANCE`] for a calibrated UR arm, whose closed-form
+/// solutions are polished by damped least squares to [`IK_TOLERANCE`].
+const POLISHED_BRANCH_TOLERANCE: f64 = 1e-6;
 
 /// The world flange pose that puts the cup tip at `tip`, pointing straight
 /// down, with the flange x axis at `yaw` from world x.
@@ -186,15 +189,22 @@ impl Arm {
         flange: &Isometry3<f64>,
         near: &Joints,
     ) -> Option<Joints> {
-        if self.ur.is_some() {
-            nearest(
+        match &self.ur {
+            Some(g) => nearest(
                 self.ur_ik_branches(base, flange, near)
                     .into_iter()
                     .flatten(),
                 near,
             )
-        } else {
-            self.numeric_ik(base, flange, near)
+            // A calibrated arm's closed form is its nominal arm's: at the
+            // edge of the reach (the elbow nearly straight) the nominal
+            // arm may fall short where the real one reaches.
+            .or_else(|| {
+                (!g.exact)
+                    .then(|| self.numeric_ik(base, flange, near))
+                    .flatten()
+            }),
+            None => self.numeric_ik(base, flange, near),
         }
     }
 
@@ -217,9 +227,27 @@ impl Arm {
     /// or where no branch's solution is `q` (outside the limits).
     pub fn ur_branch(&self, base: &Isometry3<f64>, q: &Joints) -> Option<usize> {
         let flange = self.flange_pose(base, q);
+        // A calibrated arm's solutions are polished to the pose: `q` to
+        // within what the polishing leaves.
+        let tolerance = match &self.ur {
+            Some(g) if !g.exact => POLISHED_BRANCH_TOLERANCE,
+            _ => BRANCH_TOLERANCE,
+        };
         self.ur_ik_branches(base, &flange, q)
             .iter()
-            .position(|s| s.is_some_and(|s| joint_distance(&s, q) < BRANCH_TOLERANCE))
+            .position(|s| s.is_some_and(|s| joint_distance(&s, q) < tolerance))
+    }
+
+    /// How far (rad) one of the learned loop's steps, which turn wrist 1
+    /// against the shoulder and the elbow to keep the cup down, may turn
+    /// the flange: 1e-6 on an exact UR arm (a step on another arm's wrist
+    /// turns it far more); a milliradian on a calibrated one, whose
+    /// shoulder, elbow and wrist 1 axes are parallel only to about that.
+    pub fn cup_down_tolerance(&self) -> f64 {
+        match &self.ur {
+            Some(g) if !g.exact => 1e-3,
+            _ => 1e-6,
+        }
     }
 
     /// [`Arm::ur_ik_branches`] within the given limits.

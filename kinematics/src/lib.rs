@@ -68,6 +68,13 @@ pub struct UrGeometry {
     pub d4: f64,
     pub d5: f64,
     pub d6: f64,
+    /// Whether the joint origins are the DH encoding to within 1e-6 (the
+    /// built-in UR10, a ROS description as shipped). A calibrated arm's
+    /// are not: its closed-form solutions are polished to the exact pose,
+    /// its branches told apart more loosely, and its cup tip along the
+    /// policy's steps found by forward kinematics
+    /// ([`Arm::cup_down_tip`] is `None`).
+    pub exact: bool,
 }
 
 /// A serial 6-axis arm.

@@ -43,8 +43,17 @@ pub type MeshReader<'a> = dyn Fn(&str) -> Result<Vec<u8>, String> + 'a;
 pub const DEFAULT_ACCELERATION: f64 = 2.5;
 /// Jerk limit (rad/s³) of a joint whose description gives none.
 pub const DEFAULT_JERK: f64 = 10.0;
-/// How closely joint origins must match the DH encoding to count as UR.
+/// How closely joint origins must match the DH encoding to count as an
+/// exact UR arm (the built-in UR10, a ROS description as shipped).
 const UR_TOLERANCE: f64 = 1e-6;
+/// How closely (radians, metres) joint origins must match the DH encoding
+/// to count as a UR arm at all: a calibrated description (ROS's
+/// `ur_calibration` writes offsets of about a milliradian and a
+/// millimetre into every joint origin) is a UR arm whose closed form is
+/// a close first guess, polished to the exact pose
+/// ([`UrGeometry::exact`] false). A wrist moved a centimetre is another
+/// arm.
+const UR_CALIBRATED: f64 = 5e-3;
 
 /// Reads a 6-axis arm from URDF text. See the module documentation for what
 /// is accepted. A collision mesh is refused: its file cannot be read
@@ -491,15 +500,22 @@ fn add_shapes(
 
 /// The UR geometry, when the joint origins are the DH encoding
 /// `Tx(a_{i-1}) Rx(alpha_{i-1}) Tz(d_i)` of a UR arm (alpha = π/2, 0, 0, π/2,
-/// -π/2; a1 = d2 = d3 = a4 = a5 = 0) with z axes, to within [`UR_TOLERANCE`],
-/// after any fixed mount before the base joint (its origin `mount · Tz(d1)`).
+/// -π/2; a1 = d2 = d3 = a4 = a5 = 0) with z axes, to within [`UR_CALIBRATED`]
+/// (exact within [`UR_TOLERANCE`]), after any fixed mount before the base
+/// joint (its origin `mount · Tz(d1)`).
 fn detect_ur(
     origins: &[Isometry3<f64>; DOF],
     axes: &[Unit<Vector3<f64>>; DOF],
 ) -> Option<UrGeometry> {
-    if axes
+    // The largest deviation from the DH encoding seen, over the checks.
+    let mut worst: f64 = 0.0;
+    let mut within = |deviation: f64| {
+        worst = worst.max(deviation);
+        deviation <= UR_CALIBRATED
+    };
+    if !axes
         .iter()
-        .any(|a| (a.into_inner() - Vector3::z()).norm() > UR_TOLERANCE)
+        .all(|a| within((a.into_inner() - Vector3::z()).norm()))
     {
         return None;
     }
@@ -514,10 +530,10 @@ fn detect_ur(
     origins[0] = Isometry3::translation(0.0, 0.0, d1);
     let alpha = [0.0, FRAC_PI_2, 0.0, 0.0, FRAC_PI_2, -FRAC_PI_2];
     for (o, al) in origins.iter().zip(alpha) {
-        if o.rotation
-            .angle_to(&UnitQuaternion::from_euler_angles(al, 0.0, 0.0))
-            > UR_TOLERANCE
-        {
+        if !within(
+            o.rotation
+                .angle_to(&UnitQuaternion::from_euler_angles(al, 0.0, 0.0)),
+        ) {
             return None;
         }
     }
@@ -532,9 +548,9 @@ fn detect_ur(
         Vector3::new(0.0, -d5, 0.0),
         Vector3::new(0.0, d6, 0.0),
     ];
-    let matches = (0..DOF).all(|i| (t(i) - expected[i]).norm() <= UR_TOLERANCE);
+    let matches = (0..DOF).all(|i| within((t(i) - expected[i]).norm()));
     // The closed form divides by a2, a3 and d6.
-    let proper = [a2, a3, d6].iter().all(|v| v.abs() > UR_TOLERANCE);
+    let proper = [a2, a3, d6].iter().all(|v| v.abs() > UR_CALIBRATED);
     let x = mount.rotation * Vector3::x();
     let heading = if x.x == 1.0 { 0.0 } else { x.y.atan2(x.x) };
     (matches && proper).then_some(UrGeometry {
@@ -546,5 +562,6 @@ fn detect_ur(
         d4,
         d5,
         d6,
+        exact: worst <= UR_TOLERANCE,
     })
 }

@@ -36,15 +36,17 @@ pub struct CupDownTip {
 impl Arm {
     /// The cup tip for joints moved from `from`, where it is at `tip`
     /// (world), keeping `θ2 + θ3 + θ4` and `θ5` (the learned loop's
-    /// cup-down steps); `None` unless the arm has the UR geometry and the
-    /// cup axis is joint 6's.
+    /// cup-down steps); `None` unless the arm has the exact UR geometry
+    /// ([`UrGeometry::exact`](crate::UrGeometry::exact): a calibrated
+    /// arm's tip is not the planar arm's to the micrometre) and the cup
+    /// axis is joint 6's.
     pub fn cup_down_tip(
         &self,
         base: &Isometry3<f64>,
         from: &Joints,
         tip: &Point3<f64>,
     ) -> Option<CupDownTip> {
-        let g = self.ur.as_ref()?;
+        let g = self.ur.as_ref().filter(|g| g.exact)?;
         if !self.tool_on_last_axis() {
             return None;
         }

@@ -76,7 +76,7 @@ fn cup_down_from(
 ) -> Result<(Joints, Isometry3<f64>), Shortfall> {
     let next = stepped(q, step);
     let after = arm.flange_pose(base, &next);
-    if flange.rotation.angle_to(&after.rotation) >= 1e-6 {
+    if flange.rotation.angle_to(&after.rotation) >= arm.cup_down_tolerance() {
         return Err(Shortfall::Limits {
             joint: None,
             value: f64::NAN,
