@@ -51,6 +51,9 @@ pub struct TrainingReport {
 pub const MIN_REASONER_ACCURACY: f64 = 0.99;
 /// Held-out mean sub-goal error (m) above which `train` warns.
 pub const MAX_SUBGOAL_ERROR: f64 = 0.010;
+/// The share of the demonstrated sub-goals the dynamics policy must reach
+/// in its last DAgger pass, below which `train` warns.
+pub const MIN_POLICY_REACHED: f64 = 0.9;
 
 /// How many products' guessed pairs `train`'s message names (each with
 /// the products the list puts after it).
@@ -130,6 +133,10 @@ pub enum Weakness {
         /// The pairs ordered so (first before second).
         untaught: Vec<(String, String)>,
     },
+    /// The dynamics policy reaches fewer than [`MIN_POLICY_REACHED`] of
+    /// the demonstrated sub-goals in its last DAgger pass: the learned
+    /// planner will hand most motions to RRT-Connect.
+    PolicyReachesFew { reached: usize, rollouts: usize },
     /// Demonstrations that break the taught sequence rule (their
     /// decisions were left out of the reasoner's examples).
     SequenceExceptions {
@@ -248,6 +255,11 @@ impl std::fmt::Display for Weakness {
                     }
                 )
             }
+            Weakness::PolicyReachesFew { reached, rollouts } => write!(
+                f,
+                "the dynamics policy reaches only {reached} of {rollouts} demonstrated sub-goals in {} steps: the learned planner will hand most motions to RRT-Connect. Its steps turn the base, shoulder and elbow and keep the cup down with wrist 1, as a UR arm's wrist does; on an arm whose wrist cannot (another kind of arm), no model can, and the expert or `--planner rrt` is the planner to use; on a UR arm, teach more demonstrations or raise --dagger-rounds",
+                packwright_motion::execute::MAX_POLICY_STEPS
+            ),
             Weakness::SequenceExceptions {
                 exceptions,
                 demonstrations,
@@ -260,6 +272,17 @@ impl std::fmt::Display for Weakness {
             ),
         }
     }
+}
+
+/// [`Weakness::PolicyReachesFew`] when the last DAgger pass reached fewer
+/// than [`MIN_POLICY_REACHED`] of its sub-goals.
+pub fn policy_weakness(dagger: &[crate::dagger::RoundMetrics]) -> Option<Weakness> {
+    let last = dagger.last()?;
+    (last.rollouts > 0 && (last.reached as f64) < MIN_POLICY_REACHED * last.rollouts as f64)
+        .then_some(Weakness::PolicyReachesFew {
+            reached: last.reached,
+            rollouts: last.rollouts,
+        })
 }
 
 /// The weaknesses of a training run's metrics.
@@ -353,15 +376,14 @@ pub fn run(
         .filter_map(|(ep, log)| {
             log.as_ref().map(|log| Recorded {
                 log,
+                arm: &ep.arm,
                 base: ep.task.cell.base,
                 suction: ep.task.cell.suction,
             })
         })
         .collect();
-    // One arm coaches: the first demonstration's (a lesson whose cells
-    // have different arms is coached with it; the rollouts then label
-    // those cells' states less well, which the DAgger figures show).
-    let coach = ExpertCoach::new(&episodes[0].arm, &recorded);
+    // Each demonstration is rolled out with its own cell's arm.
+    let coach = ExpertCoach::new(&recorded);
     let (mut trained, metrics) = train(&set, config, Some(&coach), progress)?;
     trained.set_task(lesson.task());
     let Metrics {
@@ -380,6 +402,7 @@ pub fn run(
         ],
         config.dagger_rounds,
     );
+    warnings.extend(policy_weakness(&dagger));
     for (cell, alone) in &lesson.read_otherwise {
         warnings.push(Weakness::CellReadsOtherwise {
             cell: cell.clone(),
@@ -463,6 +486,31 @@ pub fn run(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The policy reaching fewer than nine in ten of its sub-goals in the
+    /// last DAgger pass is said (a non-UR arm reached 0 of 18 silently);
+    /// the passes before do not count.
+    #[test]
+    fn a_policy_that_reaches_few_sub_goals_is_said() {
+        let round = |round, reached| crate::dagger::RoundMetrics {
+            round,
+            rollouts: 100,
+            reached,
+            added: 0,
+            seconds: 0.0,
+        };
+        assert_eq!(
+            policy_weakness(&[round(0, 95), round(1, 12)]),
+            Some(Weakness::PolicyReachesFew {
+                reached: 12,
+                rollouts: 100
+            })
+        );
+        assert_eq!(policy_weakness(&[round(0, 10), round(1, 90)]), None);
+        assert_eq!(policy_weakness(&[]), None);
+        let w = policy_weakness(&[round(0, 0)]).expect("a weakness");
+        assert!(w.to_string().contains("reaches only 0 of 100"), "{w}");
+    }
     use std::collections::BTreeMap;
 
     fn metrics(valid_metric: f64, converged: bool) -> NetworkMetrics {

@@ -21,7 +21,9 @@ use rayon::prelude::*;
 
 /// One demonstrated sub-goal motion.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Motion {
+pub struct Motion<'a> {
+    /// The arm of its cell.
+    pub arm: &'a Arm,
     pub start: Joints,
     /// The joints the expert reached the sub-goal with.
     pub goal: Joints,
@@ -35,24 +37,26 @@ pub struct Motion {
     pub suction: f64,
 }
 
-/// Where a log was recorded: its cell's robot base and cup length.
+/// Where a log was recorded: its cell's arm, robot base and cup length.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Recorded<'l> {
     pub log: &'l MotionLog,
+    pub arm: &'l Arm,
     pub base: [f64; 3],
     pub suction: f64,
 }
 
-/// The expert's labels for the states a policy visits, with one arm in
-/// the cells of the logs.
+/// The expert's labels for the states a policy visits, each motion with
+/// its own cell's arm (a lesson of a UR3e's and a UR20's cells was once
+/// rolled out with the first arm alone: none of the UR20's sub-goals was
+/// reached, and nothing said why).
 pub struct ExpertCoach<'a> {
-    arm: &'a Arm,
-    motions: Vec<Motion>,
+    motions: Vec<Motion<'a>>,
 }
 
 impl<'a> ExpertCoach<'a> {
-    /// The sub-goal motions of `logs` (expert replays by `arm`).
-    pub fn new(arm: &'a Arm, logs: &[Recorded]) -> Self {
+    /// The sub-goal motions of `logs` (expert replays, each by its arm).
+    pub fn new(logs: &[Recorded<'a>]) -> Self {
         let motions = logs
             .iter()
             .flat_map(|r| r.log.subgoals.iter().map(move |s| (r, s)))
@@ -60,6 +64,7 @@ impl<'a> ExpertCoach<'a> {
             // (`record::keeps_cup_down`), as in its training set.
             .filter(|(_, s)| record::keeps_cup_down(&s.start, &s.goal))
             .map(|(r, s)| Motion {
+                arm: r.arm,
                 start: s.start,
                 goal: s.goal,
                 target: s.target,
@@ -68,10 +73,10 @@ impl<'a> ExpertCoach<'a> {
                 suction: r.suction,
             })
             .collect();
-        ExpertCoach { arm, motions }
+        ExpertCoach { motions }
     }
 
-    pub fn motions(&self) -> &[Motion] {
+    pub fn motions(&self) -> &[Motion<'a>] {
         &self.motions
     }
 
@@ -85,14 +90,14 @@ impl<'a> ExpertCoach<'a> {
         let f = |v: [f64; 3]| v.map(|x| x as f32);
         let mut visited = Vec::new();
         let reached = policy_steps(
-            self.arm,
+            m.arm,
             &m.base,
             m.suction,
             m.start,
             m.target,
             m.tolerance,
             &mut |q, delta| {
-                let joints = f(self.arm.policy_joints(q));
+                let joints = f(m.arm.policy_joints(q));
                 visited.push(ActionExample {
                     delta: f(delta),
                     joints,
@@ -192,14 +197,12 @@ mod tests {
     fn dagger_reaches_more_sub_goals() {
         let arm = Arm::ur10();
         let (log, actions) = demonstrations(&arm, 150, 3);
-        let coach = ExpertCoach::new(
-            &arm,
-            &[Recorded {
-                log: &log,
-                base: [0.0; 3],
-                suction: 0.1,
-            }],
-        );
+        let coach = ExpertCoach::new(&[Recorded {
+            log: &log,
+            arm: &arm,
+            base: [0.0; 3],
+            suction: 0.1,
+        }]);
         assert_eq!(coach.motions().len(), 150);
         let set = TrainingSet {
             graphs: vec![GraphExample {
