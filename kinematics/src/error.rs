@@ -64,6 +64,19 @@ pub enum UrdfError {
         velocity: f64,
         min: f64,
     },
+    /// A joint's acceleration or jerk limit outside the bounds of sense a
+    /// cell's own `acceleration` and `jerk` statements have.
+    #[error(
+        "robot description: joint `{joint}`'s <limit> {what} is {value}, outside {lower}-{upper} {unit}: the smoothing keeps every motion within it, so a value this far off is a typo or another unit (a cell's `{what}` statement overrides the description's)"
+    )]
+    Dynamics {
+        joint: String,
+        what: &'static str,
+        value: f64,
+        lower: f64,
+        upper: f64,
+        unit: &'static str,
+    },
     /// A collision mesh that cannot be read or used.
     #[error(
         "robot description: link `{link}`: collision mesh `{file}`: {reason}. packwright bounds each collision mesh by a box or a capsule, so it reads the file (STL or OBJ, relative to the description, `package://` through ROS_PACKAGE_PATH or the description's folders); or describe the link by <box>, <cylinder>, <sphere> or <capsule>"

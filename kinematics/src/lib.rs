@@ -16,7 +16,10 @@ mod urdf;
 pub use error::UrdfError;
 pub use kinematics::*;
 pub use packwright_interface::joints::{DOF, Joints, Limits};
-pub use urdf::{DEFAULT_ACCELERATION, DEFAULT_JERK, MeshReader, from_urdf, from_urdf_with};
+pub use urdf::{
+    ACCELERATION_RANGE, DEFAULT_ACCELERATION, DEFAULT_JERK, JERK_RANGE, MeshReader, from_urdf,
+    from_urdf_with,
+};
 
 use nalgebra::{Isometry3, Point3, Unit, Vector3};
 

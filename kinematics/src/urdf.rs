@@ -16,7 +16,8 @@
 //! URDF 1.2 attributes `acceleration` (or `deceleration`, whichever is
 //! smaller) and `jerk` of `<limit>` (`<robot version="1.2">`); when absent
 //! (or for older versions, which ignore them) they default to
-//! [`DEFAULT_ACCELERATION`] and [`DEFAULT_JERK`].
+//! [`DEFAULT_ACCELERATION`] and [`DEFAULT_JERK`]; given, they must lie in
+//! [`ACCELERATION_RANGE`] and [`JERK_RANGE`], a cell's own bounds.
 //!
 //! Collision: `<collision>` cylinders and capsules become [`Shape::Capsule`]s
 //! over their axis segment (a capsule contains its cylinder and overhangs
@@ -392,6 +393,14 @@ fn pose(p: &Pose, what: &str) -> Result<Isometry3<f64>, UrdfError> {
     ))
 }
 
+/// The joint acceleration limits a description may give (rad/s²): the
+/// bounds a cell's `acceleration` statement has (`check`'s E029; a test
+/// in `pipeline` keeps the two equal).
+pub const ACCELERATION_RANGE: (f64, f64) = (0.1, 40.0);
+/// The joint jerk limits a description may give (rad/s³), as
+/// [`ACCELERATION_RANGE`].
+pub const JERK_RANGE: (f64, f64) = (1.0, 2000.0);
+
 /// The slowest joint velocity limit accepted (rad/s): slower, a joint
 /// takes minutes per motion and the smoother gives up (a URDF with
 /// `velocity="0.0001"` passed `check` and `execute` printed the
@@ -419,13 +428,39 @@ fn limits(joint: &urdf_rs::Joint) -> Result<Limits, UrdfError> {
             min: MIN_VELOCITY,
         });
     }
-    let positive = |v: f64, default: f64| if v.is_finite() && v > 0.0 { v } else { default };
+    // Absent (urdf-rs reads infinity: URDF 1.2's "unlimited"), the
+    // default; given, within the bounds a cell's own statements have (1e6
+    // rad/s² was taken as it was, and the blend of so short a ramp ran
+    // slower than the default's; an explicit 0 was taken as absent).
+    let given = |v: f64, default: f64, what: &'static str, (lower, upper): (f64, f64), unit| {
+        if v == f64::INFINITY {
+            Ok(default)
+        } else if (lower..=upper).contains(&v) {
+            Ok(v)
+        } else {
+            Err(UrdfError::Dynamics {
+                joint: name.clone(),
+                what,
+                value: v,
+                lower,
+                upper,
+                unit,
+            })
+        }
+    };
+    let acceleration = l.acceleration.min(l.deceleration);
     Ok(Limits {
         lower,
         upper,
         velocity: l.velocity,
-        acceleration: positive(l.acceleration.min(l.deceleration), DEFAULT_ACCELERATION),
-        jerk: positive(l.jerk, DEFAULT_JERK),
+        acceleration: given(
+            acceleration,
+            DEFAULT_ACCELERATION,
+            "acceleration",
+            ACCELERATION_RANGE,
+            "rad/s²",
+        )?,
+        jerk: given(l.jerk, DEFAULT_JERK, "jerk", JERK_RANGE, "rad/s³")?,
     })
 }
 

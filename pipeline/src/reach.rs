@@ -253,6 +253,20 @@ mod tests {
         );
     }
 
+    /// A robot description's acceleration and jerk limits are held to the
+    /// bounds a cell's `acceleration` and `jerk` statements have (E029).
+    #[test]
+    fn a_descriptions_dynamics_bounds_are_a_cells() {
+        assert_eq!(
+            packwright_compiler::model::ACCELERATION_RANGE,
+            packwright_kinematics::ACCELERATION_RANGE
+        );
+        assert_eq!(
+            packwright_compiler::model::JERK_RANGE,
+            packwright_kinematics::JERK_RANGE
+        );
+    }
+
     /// `check` refuses a product side the simulator cannot build (E025).
     #[test]
     fn the_compilers_thinnest_product_is_the_simulators() {

@@ -292,6 +292,33 @@ fn limits_follow_the_urdf_version_and_joint_type() {
     let arm = from_urdf(&text).unwrap();
     assert_eq!((arm.limits[2].lower, arm.limits[2].upper), (-TAU, TAU));
 
+    // A given acceleration or jerk is held to a cell's bounds (E029's):
+    // an explicit 0 is not "absent", and 1e6 rad/s² is a typo or another
+    // unit, refused with the joint named.
+    for (from, to, says) in [
+        (
+            r#"acceleration="2.5" jerk="10""#,
+            r#"acceleration="0" jerk="10""#,
+            "acceleration is 0",
+        ),
+        (
+            r#"acceleration="2.5" jerk="10""#,
+            r#"acceleration="1e6" jerk="10""#,
+            "acceleration is 1000000",
+        ),
+        (
+            r#"acceleration="2.5" jerk="10""#,
+            r#"acceleration="2.5" jerk="1e9""#,
+            "jerk is 1000000000",
+        ),
+    ] {
+        let msg = rejected(&edited(from, to));
+        assert!(
+            msg.contains(says) && msg.contains("shoulder_pan_joint"),
+            "{msg}"
+        );
+    }
+
     // Narrow wrist-3 limits: yaw-free IK still puts joint 6 as near as allowed.
     let narrow = UR10_URDF.replace(
         r#"<limit lower="-6.283185307179586" upper="6.283185307179586" effort="56"
