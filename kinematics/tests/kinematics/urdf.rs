@@ -142,14 +142,14 @@ fn a_calibrated_ur_arm_is_solved_in_closed_form_and_polished() {
         if in_joint && line.trim_start().starts_with("<origin") {
             in_joint = false;
             let (dx, dy, dz) = (
-                rng.gen_range(-3e-3..3e-3),
-                rng.gen_range(-3e-3..3e-3),
-                rng.gen_range(-3e-3..3e-3),
+                rng.random_range(-3e-3..3e-3),
+                rng.random_range(-3e-3..3e-3),
+                rng.random_range(-3e-3..3e-3),
             );
             let (r, p, y) = (
-                rng.gen_range(-3e-3..3e-3),
-                rng.gen_range(-3e-3..3e-3),
-                rng.gen_range(-3e-3..3e-3),
+                rng.random_range(-3e-3..3e-3),
+                rng.random_range(-3e-3..3e-3),
+                rng.random_range(-3e-3..3e-3),
             );
             out.push_str(&calibrated(line, [dx, dy, dz], [r, p, y]));
         } else {
