@@ -271,6 +271,27 @@ fn a_release_handed_to_rrt_connect_goes_down_from_the_experts_above_the_slot() {
     assert_eq!(report["complete"], true, "{report}");
 }
 
+/// Found by helper Y's probe of other arms (a UR16e, the bundled model
+/// taught the UR10): a learned release whose motion collides went to
+/// RRT-Connect, whose releases nearest the arm shape the policy left all
+/// fold the upper arm into wrist 1, and the package stopped ("every arm
+/// pose there collides") where the expert and RRT-Connect pack it. The
+/// fallback now tries the release's other arm shapes, as the expert's
+/// own placing does.
+#[test]
+fn a_release_handed_to_rrt_connect_tries_the_releases_other_arm_shapes() {
+    let out = packwright(&[
+        "execute",
+        "tests/cells/ur16e/release_shape.pack",
+        "--scenario",
+        "more6727/1",
+        "--json",
+    ]);
+    let report = json(&out);
+    assert_eq!(report["complete"], true, "{}", text(&out));
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+}
+
 /// Found by the same probe (cells 3063 and 3081): a learned hover swung
 /// about half a turn (either way round as short) and ended 4 mrad inside
 /// the base's limit; the descent onto the product, a few milliradians on,

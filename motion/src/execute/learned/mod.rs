@@ -739,7 +739,26 @@ impl<W: World> Learned<'_, W> {
                                 samples: [first.samples, down.samples].concat(),
                             })
                         };
-                        detour().map_err(|_| direct)
+                        // The release's other arm shapes, as the expert's
+                        // own placing tries them (`Station::release_shape`):
+                        // the shape the policy left the arm in can fold
+                        // the upper arm into wrist 1 at every release
+                        // nearest it (a UR16e's shorter links), where
+                        // another shape lets go free.
+                        let shaped = || -> Option<Route> {
+                            let [over, down] =
+                                s.release_shape([above, &expert[k]], &start, 0.0, load)?;
+                            let (at, first) = s.route_in_shape(how, k, start, over, load).ok()?;
+                            let (_, down) = s.route_solved(how, k + 1, at, down, 0.0, load).ok()?;
+                            Some(Route {
+                                waypoints: [first.waypoints, down.waypoints].concat(),
+                                samples: [first.samples, down.samples].concat(),
+                            })
+                        };
+                        detour()
+                            .ok()
+                            .or_else(|| (!s.late()).then(shaped).flatten())
+                            .ok_or(direct)
                     }
                     _ => Err(direct),
                 })
