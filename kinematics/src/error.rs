@@ -67,7 +67,8 @@ pub enum UrdfError {
     /// A joint's acceleration or jerk limit outside the bounds of sense a
     /// cell's own `acceleration` and `jerk` statements have.
     #[error(
-        "robot description: joint `{joint}`'s <limit> {what} is {value}, outside {lower}-{upper} {unit}: the smoothing keeps every motion within it, so a value this far off is a typo or another unit (a cell's `{what}` statement overrides the description's)"
+        "robot description: joint `{joint}`'s <limit> {what} is {}, outside {lower}-{upper} {unit}: the smoothing keeps every motion within it, so a value this far off is a typo or another unit (a cell's `{what}` statement overrides the description's)",
+        shown(*.value)
     )]
     Dynamics {
         joint: String,
@@ -88,4 +89,14 @@ pub enum UrdfError {
     },
     #[error("robot description: {what} has a non-positive or non-finite size")]
     Size { what: String },
+}
+
+/// A number as a person reads it: plain where it is of a joint's scale,
+/// else in scientific notation (1e300 was printed with all its digits).
+fn shown(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }

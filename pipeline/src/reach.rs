@@ -58,21 +58,39 @@ impl RobotWorkspace {
     }
 
     /// The first pose `unreached` finds out of reach with the `standing`
-    /// products where they stand, and the one its nearest arm pose meets.
+    /// products where they stand, and the one its nearest arm pose meets;
+    /// where no product meets the pose itself (a lift, whose held product
+    /// meets one on the way up), the nearest standing product without
+    /// which it is reached (`check`'s W003 named no product for a lift
+    /// the jitter blocked, and so said nothing).
     fn blocked_among(
         &self,
         m: &Model,
         cell: usize,
         standing: &[Standing],
-        unreached: impl FnOnce(&Reachability) -> Option<execute::Unreached>,
+        unreached: impl Fn(&Reachability) -> Option<execute::Unreached>,
     ) -> Option<Blocked> {
         let among = bodies(m, standing);
-        self.ask(m, cell, |r| {
-            let r = r.among(&among);
+        self.ask(m, cell, |empty| {
+            let r = empty.among(&among);
             let u = unreached(&r)?;
             let by = r
                 .blocked_by(u.tip)
-                .and_then(|name| index_of(m, standing, &name));
+                .and_then(|name| index_of(m, standing, &name))
+                .or_else(|| {
+                    let away = |j: usize| {
+                        let at = among[j].centre;
+                        (at[0] - u.tip[0]).hypot(at[1] - u.tip[1])
+                    };
+                    let mut nearest: Vec<usize> = (0..among.len()).collect();
+                    nearest.sort_by(|&a, &b| away(a).total_cmp(&away(b)));
+                    let freeing = nearest.into_iter().find(|&j| {
+                        let mut fewer = among.clone();
+                        fewer.remove(j);
+                        unreached(&empty.among(&fewer)).is_none()
+                    })?;
+                    index_of(m, standing, &among[freeing].name)
+                });
             Some(Blocked {
                 pose: pose(u).pose,
                 by,

@@ -304,12 +304,12 @@ fn limits_follow_the_urdf_version_and_joint_type() {
         (
             r#"acceleration="2.5" jerk="10""#,
             r#"acceleration="1e6" jerk="10""#,
-            "acceleration is 1000000",
+            "acceleration is 1e6",
         ),
         (
             r#"acceleration="2.5" jerk="10""#,
             r#"acceleration="2.5" jerk="1e9""#,
-            "jerk is 1000000000",
+            "jerk is 1e9",
         ),
     ] {
         let msg = rejected(&edited(from, to));
