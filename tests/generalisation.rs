@@ -292,6 +292,29 @@ fn a_release_handed_to_rrt_connect_tries_the_releases_other_arm_shapes() {
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
 }
 
+/// Found by helper Y's probe of other arms: a UR3e cannot hold its cup
+/// 0.35 m over a pending area 0.37 m out (the UR10's start height), and
+/// `check` refused the cell for the start alone (E039), though every pose
+/// the packing needs is reached. The start is now the highest of 0.35,
+/// 0.30, 0.25 and 0.20 m the arm reaches free.
+#[test]
+fn a_small_arm_starts_lower_where_the_ur10s_start_is_out_of_its_reach() {
+    let pack = "tests/cells/ur3e/start_low.pack";
+    let out = packwright(&["check", pack]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let out = packwright(&[
+        "execute",
+        pack,
+        "--order",
+        "o80",
+        "--planner",
+        "expert",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    assert_eq!(json(&out)["complete"], true, "{}", text(&out));
+}
+
 /// Found by the same probe (cells 3063 and 3081): a learned hover swung
 /// about half a turn (either way round as short) and ended 4 mrad inside
 /// the base's limit; the descent onto the product, a few milliradians on,

@@ -1677,7 +1677,8 @@ pub fn home_tip(cell: &CellScene) -> [f64; 3] {
 }
 
 /// The start pose: the cup [`HOME_HEIGHT`] over the middle of the
-/// pending area, pointing down, collision-free, on the branch nearest the usual UR
+/// pending area (lower, down to 0.2 m, where the arm reaches no free pose
+/// there: [`START_HEIGHTS`]), pointing down, collision-free, on the branch nearest the usual UR
 /// "ready" pose among those that can go straight down from there to
 /// [`START_CHECK_HEIGHT`] over the table (any free one if none can). A
 /// branch that cannot (the upper arm pointing back over the table, the
@@ -1714,10 +1715,19 @@ pub(crate) fn home_on(
     let top = home_tip(cell);
     let low = Point3::new(top[0], top[1], START_CHECK_HEIGHT);
     let ready = checker.arm().from_ur_convention(&READY);
-    let free: Vec<Joints> = solutions(checker, Point3::from(top), 0.0, &ready)
-        .into_iter()
-        .filter(|q| checker.check(q, None, None).is_none())
-        .collect();
+    // The highest of the start heights with a free pose: a smaller arm
+    // than the UR10 (a UR3e's 0.5 m reach) cannot hold its cup 0.35 m
+    // over a pending area 0.37 m out, and reaches every pose the packing
+    // needs there.
+    let free: Vec<Joints> = START_HEIGHTS
+        .iter()
+        .map(|&z| {
+            solutions(checker, Point3::new(top[0], top[1], z), 0.0, &ready)
+                .into_iter()
+                .filter(|q| checker.check(q, None, None).is_none())
+                .collect::<Vec<_>>()
+        })
+        .find(|free| !free.is_empty())?;
     let descends = |q: &&Joints| {
         reach(checker, low, 0.0, q, Load::FREE)
             .is_some_and(|down| checker.check_motion(q, &down, None, None).is_none())
@@ -1735,6 +1745,11 @@ pub(crate) fn home_on(
 /// The usual UR "ready" pose: where the start pose's inverse kinematics
 /// looks first.
 pub(crate) const READY: Joints = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
+
+/// The heights (m) over the table the start pose's cup tip is tried at,
+/// highest first: [`HOME_HEIGHT`], then lower for an arm that cannot reach
+/// that high over the pending area.
+pub const START_HEIGHTS: [f64; 4] = [HOME_HEIGHT, 0.30, 0.25, 0.20];
 
 /// How low over the table [`home`] checks that the arm can go straight
 /// down from its start (a hover over a small product).
