@@ -1162,12 +1162,10 @@ pub(crate) mod tests {
         }
     }
 
-    /// A demonstration of a `sequence random` block is taught in the
-    /// rule's order: ascending, descending or a priority list.
-    #[test]
-    fn a_demonstration_that_shows_any_order_is_taught_in_the_rules() {
+    /// A world of one inventory `inv` of cell `c` stocking `products`.
+    fn one_inventory(products: &[&str]) -> WorldFile {
         use packwright_compiler::artifact::{At, InventoryRecord};
-        let world = WorldFile {
+        WorldFile {
             schema: "test".into(),
             version: 0,
             cells: Vec::new(),
@@ -1175,15 +1173,23 @@ pub(crate) mod tests {
             inventories: vec![InventoryRecord {
                 name: "inv".into(),
                 cell: "c".into(),
-                products: ["a", "b", "c", "d"]
+                products: products
+                    .iter()
                     .map(|p| At {
-                        product: p.into(),
+                        product: p.to_string(),
                         at: [0.0; 3],
                     })
-                    .to_vec(),
+                    .collect(),
             }],
             orders: Vec::new(),
-        };
+        }
+    }
+
+    /// A demonstration of a `sequence random` block is taught in the
+    /// rule's order: ascending, descending or a priority list.
+    #[test]
+    fn a_demonstration_that_shows_any_order_is_taught_in_the_rules() {
+        let world = one_inventory(&["a", "b", "c", "d"]);
         let demo = DemonstrationRecord {
             block: "shuffled".into(),
             cell: "c".into(),
@@ -1214,24 +1220,7 @@ pub(crate) mod tests {
     /// demonstration of two products decides.
     #[test]
     fn a_direction_declared_on_single_product_demonstrations_is_the_rule() {
-        use packwright_compiler::artifact::{At, InventoryRecord};
-        let world = WorldFile {
-            schema: "test".into(),
-            version: 0,
-            cells: Vec::new(),
-            products: Vec::new(),
-            inventories: vec![InventoryRecord {
-                name: "inv".into(),
-                cell: "c".into(),
-                products: ["a", "b", "c"]
-                    .map(|p| At {
-                        product: p.into(),
-                        at: [0.0; 3],
-                    })
-                    .to_vec(),
-            }],
-            orders: Vec::new(),
-        };
+        let world = one_inventory(&["a", "b", "c"]);
         let demo = |block: &str, sequence: &[&str]| DemonstrationRecord {
             block: block.into(),
             cell: "c".into(),
