@@ -56,7 +56,9 @@ pub enum UrError {
     #[error("malformed packet from the controller: {0}")]
     Codec(CodecError),
     /// The controller refused RTDE protocol version 2.
-    #[error("the controller refused RTDE protocol version {version}")]
+    #[error(
+        "the controller refused RTDE protocol version {version}: packwright needs a controller whose software speaks it (and the input registers from 24 that external clients use); update the controller's software"
+    )]
     ProtocolRefused { version: u16 },
     /// A recipe named a field the controller does not know.
     #[error(
