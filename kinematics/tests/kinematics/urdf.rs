@@ -107,12 +107,7 @@ fn ur_geometry_is_detected_whatever_the_collision_shapes() {
     assert!(arm.ur.is_some());
     let mut rng = ChaCha8Rng::seed_from_u64(13);
     for _ in 0..100 {
-        let q = tool_down_joints(&arm, &mut rng);
-        let target = arm.flange_pose(&base(), &q);
-        let sol = arm.pose_ik(&base(), &target, &q).expect("reachable");
-        let got = arm.flange_pose(&base(), &sol);
-        assert!((got.translation.vector - target.translation.vector).norm() < 1e-9);
-        assert!(got.rotation.angle_to(&target.rotation) < 1e-9);
+        solved_to_its_pose(&arm, &tool_down_joints(&arm, &mut rng));
     }
 
     // Rounded angles beyond the 1e-6 tolerance are the UR geometry still,
@@ -167,11 +162,7 @@ fn a_calibrated_ur_arm_is_solved_in_closed_form_and_polished() {
     let mut on_branch = 0;
     for _ in 0..100 {
         let q = tool_down_joints(&arm, &mut rng);
-        let target = arm.flange_pose(&base(), &q);
-        let sol = arm.pose_ik(&base(), &target, &q).expect("reachable");
-        let got = arm.flange_pose(&base(), &sol);
-        assert!((got.translation.vector - target.translation.vector).norm() < 1e-9);
-        assert!(got.rotation.angle_to(&target.rotation) < 1e-9);
+        let sol = solved_to_its_pose(&arm, &q);
         // Its own solution, away from the stretched elbow (where the
         // nominal arm's closed form may fall short of the real arm).
         if q[2].abs() > 0.2 {
@@ -186,6 +177,17 @@ fn a_calibrated_ur_arm_is_solved_in_closed_form_and_polished() {
     // solved numerically instead).
     eprintln!("{on_branch} of 100 on a branch");
     assert!(on_branch >= 90, "{on_branch} of 100 on a branch");
+}
+
+/// The inverse kinematics of `q`'s own flange pose (nearest `q`), which
+/// must put the flange there to 1e-9 m and rad.
+fn solved_to_its_pose(arm: &Arm, q: &Joints) -> Joints {
+    let target = arm.flange_pose(&base(), q);
+    let sol = arm.pose_ik(&base(), &target, q).expect("reachable");
+    let got = arm.flange_pose(&base(), &sol);
+    assert!((got.translation.vector - target.translation.vector).norm() < 1e-9);
+    assert!(got.rotation.angle_to(&target.rotation) < 1e-9);
+    sol
 }
 
 /// `line` (an `<origin xyz=".." rpy=".."/>`) with `d` added to its xyz and
