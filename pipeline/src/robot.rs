@@ -20,7 +20,7 @@ use packwright_interface::world::{Contact, Observation, World, WorldError};
 use packwright_interface::{Joints, Report, Seen, SequenceRule};
 use packwright_motion::execute::{self, Planner};
 use packwright_ur::codec::ControllerVersion;
-use packwright_ur::dashboard::Dashboard;
+use packwright_ur::dashboard::remote_control;
 use packwright_ur::products::{JsonFeed, Known, Nominal, ProductSource, ToolTip};
 use packwright_ur::recipe::RobotState;
 use packwright_ur::safety::{CommandCheck, CommandProblem, Fault, check_state};
@@ -121,10 +121,7 @@ pub fn dry_run(
     // control: another program loaded, the speed slider below 100%, and
     // (where the dashboard says so) a robot not in remote control.
     packwright_ur::ready_to_stream(&state)?;
-    let remote = Dashboard::connect(&address.dashboard_addr(), Duration::from_secs(1))
-        .and_then(|mut d| d.is_in_remote_control())
-        .ok()
-        .flatten();
+    let remote = remote_control(&address.dashboard_addr());
     if remote == Some(false) {
         return Err(UrError::ProgramNotStarted { remote }.into());
     }

@@ -274,6 +274,24 @@ impl std::fmt::Display for Weakness {
     }
 }
 
+impl Weakness {
+    /// [`Weakness::PairsGuessed`] for the rule `taught` (of `cell`, with
+    /// several cells taught) and what it `guessed`.
+    fn pairs_guessed(
+        cell: Option<&str>,
+        taught: &packwright_interface::SequenceRule,
+        guessed: &packwright_pipeline::teach::Guessed,
+    ) -> Weakness {
+        Weakness::PairsGuessed {
+            cell: cell.map(str::to_owned),
+            taught: taught.clone(),
+            ordered: guessed.ordered,
+            pairs: guessed.pairs,
+            untaught: guessed.untaught.clone(),
+        }
+    }
+}
+
 /// [`Weakness::PolicyReachesFew`] when the last DAgger pass reached fewer
 /// than [`MIN_POLICY_REACHED`] of its sub-goals.
 pub fn policy_weakness(dagger: &[crate::dagger::RoundMetrics]) -> Option<Weakness> {
@@ -425,22 +443,18 @@ pub fn run(
             rivals: lesson.rivals.clone(),
         });
     } else if !lesson.guessed.untaught.is_empty() {
-        warnings.push(Weakness::PairsGuessed {
-            cell: None,
-            taught: lesson.sequence.clone(),
-            ordered: lesson.guessed.ordered,
-            pairs: lesson.guessed.pairs,
-            untaught: lesson.guessed.untaught.clone(),
-        });
+        warnings.push(Weakness::pairs_guessed(
+            None,
+            &lesson.sequence,
+            &lesson.guessed,
+        ));
     }
     for (cell, g) in &lesson.cell_guessed {
-        warnings.push(Weakness::PairsGuessed {
-            cell: Some(cell.clone()),
-            taught: lesson.rule_for(cell).clone(),
-            ordered: g.ordered,
-            pairs: g.pairs,
-            untaught: g.untaught.clone(),
-        });
+        warnings.push(Weakness::pairs_guessed(
+            Some(cell),
+            lesson.rule_for(cell),
+            g,
+        ));
     }
     if let Some(&first) = lesson.exceptions.first() {
         let d = &lesson.chosen[first];
@@ -486,6 +500,7 @@ pub fn run(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::collections::BTreeMap;
 
     /// The policy reaching fewer than nine in ten of its sub-goals in the
     /// last DAgger pass is said (a non-UR arm reached 0 of 18 silently);
@@ -511,7 +526,6 @@ mod tests {
         let w = policy_weakness(&[round(0, 0)]).expect("a weakness");
         assert!(w.to_string().contains("reaches only 0 of 100"), "{w}");
     }
-    use std::collections::BTreeMap;
 
     fn metrics(valid_metric: f64, converged: bool) -> NetworkMetrics {
         NetworkMetrics {

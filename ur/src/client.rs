@@ -300,14 +300,11 @@ impl Client {
         loop {
             while let Some((kind, payload)) = self.framer.next_frame()? {
                 match decode_known(kind, &payload)? {
-                    None => {}
-                    Some(packet) => match packet {
-                        Packet::Data { recipe, payload } if recipe == output.id => {
-                            newest = Some(payload)
-                        }
-                        Packet::Text(m) => self.messages.push(m),
-                        _ => {}
-                    },
+                    Some(Packet::Data { recipe, payload }) if recipe == output.id => {
+                        newest = Some(payload)
+                    }
+                    Some(Packet::Text(m)) => self.messages.push(m),
+                    _ => {}
                 }
             }
             if let Some(payload) = newest.take() {

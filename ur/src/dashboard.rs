@@ -118,3 +118,13 @@ impl Dashboard {
         self.expect("stop", "Stopped")
     }
 }
+
+/// Whether the robot at the dashboard server `address` is in remote
+/// control, asked within a second: `None` where it cannot be asked (no
+/// dashboard, or a CB3, which has no such mode).
+pub fn remote_control(address: &str) -> Option<bool> {
+    Dashboard::connect(address, Duration::from_secs(1))
+        .and_then(|mut d| d.is_in_remote_control())
+        .ok()
+        .flatten()
+}

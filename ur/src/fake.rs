@@ -339,7 +339,7 @@ impl Robot {
     /// Starts a program sent to the secondary interface.
     fn run(&mut self, script: &str, remote: bool) {
         self.record.scripts.push(script.to_string());
-        if !documented_form(script) {
+        if !crate::script::documented_form(script) {
             self.record.malformed_scripts += 1;
             return;
         }
@@ -353,23 +353,6 @@ impl Robot {
             self.runtime = RuntimeState::Playing;
         }
     }
-}
-
-/// Whether `script` has the form the URScript manual ("Connecting to
-/// URControl") gives a program sent to the controller: its first line
-/// starts with `def ` or `sec ` in the first column, its last line is
-/// `end`, and every line between is indented (or empty).
-fn documented_form(script: &str) -> bool {
-    let lines: Vec<&str> = script.trim_end().lines().collect();
-    let (Some(first), Some(last)) = (lines.first(), lines.last()) else {
-        return false;
-    };
-    let inner = &lines[1..lines.len() - 1];
-    (first.starts_with("def ") || first.starts_with("sec "))
-        && *last == "end"
-        && inner
-            .iter()
-            .all(|l| l.trim().is_empty() || l.starts_with([' ', '\t']))
 }
 
 /// The register and frequency of `rtde_set_watchdog("input_int_register_N",
@@ -820,14 +803,10 @@ fn serve_secondary(inner: &Inner, mut stream: TcpStream) {
         match stream.read(&mut buf) {
             Ok(0) => break,
             Ok(n) => text.extend_from_slice(&buf[..n]),
-            Err(e) if e.kind() == ErrorKind::ConnectionReset => {
-                reset = true;
+            Err(e) => {
+                reset = e.kind() == ErrorKind::ConnectionReset;
                 break;
             }
-            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {
-                break;
-            }
-            Err(_) => break,
         }
     }
     let script = String::from_utf8_lossy(&text).into_owned();

@@ -87,6 +87,25 @@ end
     }
 }
 
+/// Whether `script` has the form the URScript manual ("Connecting to
+/// URControl") gives a program sent to the controller: its first line
+/// starts with `def ` or `sec ` in the first column, its last line is
+/// `end`, and every line between is indented (or empty). The fake
+/// controller runs only such programs.
+#[cfg(any(test, feature = "fake"))]
+pub(crate) fn documented_form(script: &str) -> bool {
+    let lines: Vec<&str> = script.trim_end().lines().collect();
+    let (Some(first), Some(last)) = (lines.first(), lines.last()) else {
+        return false;
+    };
+    let inner = &lines[1..lines.len() - 1];
+    (first.starts_with("def ") || first.starts_with("sec "))
+        && *last == "end"
+        && inner
+            .iter()
+            .all(|l| l.trim().is_empty() || l.starts_with([' ', '\t']))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -102,6 +121,7 @@ mod tests {
     #[test]
     fn the_program_has_the_documented_form() {
         let text = Program::for_period(0.002).render();
+        assert!(documented_form(&text));
         let lines: Vec<&str> = text.trim_end().lines().collect();
         assert!(lines[0].starts_with("def "));
         assert_eq!(lines.last(), Some(&"end"));

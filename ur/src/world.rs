@@ -24,7 +24,7 @@
 use crate::address::RobotAddress;
 use crate::client::{Client, connect};
 use crate::codec::ControllerVersion;
-use crate::dashboard::Dashboard;
+use crate::dashboard::remote_control;
 use crate::error::{Service, UrError};
 use crate::products::ProductSource;
 use crate::recipe::{
@@ -215,11 +215,7 @@ impl Ur10World {
         while state.runtime_state != RuntimeState::Playing {
             if started.elapsed() > settings.start_timeout {
                 let _ = client.pause();
-                let remote =
-                    Dashboard::connect(&settings.address.dashboard_addr(), Duration::from_secs(1))
-                        .and_then(|mut d| d.is_in_remote_control())
-                        .ok()
-                        .flatten();
+                let remote = remote_control(&settings.address.dashboard_addr());
                 return Err(UrError::ProgramNotStarted { remote });
             }
             state = client.receive_state(stall.max(Duration::from_millis(500)))?;

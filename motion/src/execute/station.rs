@@ -68,6 +68,16 @@ pub struct Route {
     pub samples: Vec<Joints>,
 }
 
+impl Route {
+    /// This route, then `next` (which starts where this one ends).
+    pub fn then(self, next: Route) -> Route {
+        Route {
+            waypoints: [self.waypoints, next.waypoints].concat(),
+            samples: [self.samples, next.samples].concat(),
+        }
+    }
+}
+
 /// A sub-goal's joints ([`Station::solve`]), with the checked straight
 /// motion to them when the solve checked it (a release, a lift): where it
 /// started and its commands.

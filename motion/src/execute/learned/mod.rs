@@ -734,10 +734,7 @@ impl<W: World> Learned<'_, W> {
                             let (over, first) = s.route_solved(how, k, start, solved, 0.0, load)?;
                             let solved = s.solve(&expert[k], k + 1, &over, 0.0, load, ceiling)?;
                             let (_, down) = s.route_solved(how, k + 1, over, solved, 0.0, load)?;
-                            Ok(Route {
-                                waypoints: [first.waypoints, down.waypoints].concat(),
-                                samples: [first.samples, down.samples].concat(),
-                            })
+                            Ok(first.then(down))
                         };
                         // The release's other arm shapes, as the expert's
                         // own placing tries them (`Station::release_shape`):
@@ -750,10 +747,7 @@ impl<W: World> Learned<'_, W> {
                                 s.release_shape([above, &expert[k]], &start, 0.0, load)?;
                             let (at, first) = s.route_in_shape(how, k, start, over, load).ok()?;
                             let (_, down) = s.route_solved(how, k + 1, at, down, 0.0, load).ok()?;
-                            Some(Route {
-                                waypoints: [first.waypoints, down.waypoints].concat(),
-                                samples: [first.samples, down.samples].concat(),
-                            })
+                            Some(first.then(down))
                         };
                         detour()
                             .ok()
