@@ -89,6 +89,20 @@ pub enum UrdfError {
     },
     #[error("robot description: {what} has a non-positive or non-finite size")]
     Size { what: String },
+    /// A collision shape larger than any arm ([`crate::urdf::MAX_SPAN`]):
+    /// a description or mesh in millimetres.
+    #[error(
+        "robot description: {what} is {} m across, more than any arm ({max} m): URDF lengths are metres; a mesh exported in millimetres needs scale=\"0.001 0.001 0.001\" on its <mesh>, a description in millimetres every length divided by 1000",
+        shown(*.across)
+    )]
+    ShapeTooLarge { what: String, across: f64, max: f64 },
+    /// Joint origins adding up to more than any arm
+    /// ([`crate::urdf::MAX_SPAN`]): a description in millimetres.
+    #[error(
+        "robot description: `{robot}`'s joints span {} m from the base joint to the flange, more than any arm ({max} m): URDF lengths are metres; a description exported in millimetres needs every origin and size divided by 1000",
+        shown(*.span)
+    )]
+    SpanTooLong { robot: String, span: f64, max: f64 },
 }
 
 /// A number as a person reads it: plain where it is of a joint's scale,

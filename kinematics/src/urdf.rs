@@ -366,6 +366,20 @@ impl<'r> Chain<'r> {
             });
         };
         let flange = self.flange.map_or(self.pending, |(_, f)| f);
+        // The base joint's origin is where the arm is mounted, not its
+        // length.
+        let span: f64 = origins[1..]
+            .iter()
+            .chain([&flange])
+            .map(|o| o.translation.vector.norm())
+            .sum();
+        if span > MAX_SPAN {
+            return Err(UrdfError::SpanTooLong {
+                robot: robot.to_owned(),
+                span,
+                max: MAX_SPAN,
+            });
+        }
         let ur = detect_ur(&origins, &axes);
         Ok(Arm {
             name: robot.to_string(),
@@ -400,6 +414,13 @@ pub const ACCELERATION_RANGE: (f64, f64) = (0.1, 40.0);
 /// The joint jerk limits a description may give (rad/s³), as
 /// [`ACCELERATION_RANGE`].
 pub const JERK_RANGE: (f64, f64) = (1.0, 2000.0);
+
+/// The longest an arm may be (m), from its base joint to its flange, and
+/// the largest a collision shape may be across: the largest industrial
+/// arms reach about 4 m, so more is a description in another unit (a CAD
+/// export in millimetres made the UR10 1.5 km long, and `check` only said
+/// that its start pose was out of reach).
+pub const MAX_SPAN: f64 = 10.0;
 
 /// The slowest joint velocity limit accepted (rad/s): slower, a joint
 /// takes minutes per motion and the smoother gives up (a URDF with
@@ -477,10 +498,22 @@ fn add_shapes(
         let place = at * pose(&c.origin, &what)?;
         let positive = |v: f64| v.is_finite() && v > 0.0;
         let bad = || UrdfError::Size { what: what.clone() };
+        let within = |across: f64| {
+            if across > MAX_SPAN {
+                Err(UrdfError::ShapeTooLarge {
+                    what: what.clone(),
+                    across,
+                    max: MAX_SPAN,
+                })
+            } else {
+                Ok(())
+            }
+        };
         let segment = |length: f64, radius: f64| -> Result<Shape, UrdfError> {
             if !positive(length) || !positive(radius) {
                 return Err(bad());
             }
+            within(length.max(2.0 * radius))?;
             Ok(Shape::Capsule {
                 a: place * Point3::new(0.0, 0.0, -length / 2.0),
                 b: place * Point3::new(0.0, 0.0, length / 2.0),
@@ -495,6 +528,7 @@ fn add_shapes(
                 if !positive(*radius) {
                     return Err(bad());
                 }
+                within(2.0 * radius)?;
                 let centre = place * Point3::origin();
                 shapes.push(Shape::Capsule {
                     a: centre,
@@ -506,6 +540,7 @@ fn add_shapes(
                 if !size.iter().all(|v| positive(*v)) {
                     return Err(bad());
                 }
+                within(size.iter().fold(0.0, |m, v| m.max(*v)))?;
                 shapes.push(Shape::Cuboid {
                     pose: place,
                     half: Vector3::from(size.0) / 2.0,
@@ -526,6 +561,14 @@ fn add_shapes(
                 for p in &mut read.points {
                     p.coords.component_mul_assign(&scale);
                 }
+                let (low, high) = read.points.iter().fold(
+                    (
+                        Vector3::repeat(f64::INFINITY),
+                        Vector3::repeat(f64::NEG_INFINITY),
+                    ),
+                    |(low, high), p| (low.inf(&p.coords), high.sup(&p.coords)),
+                );
+                within((high - low).max())?;
                 shapes.extend(mesh::bounds(&read, &place));
             }
         }

@@ -100,6 +100,18 @@ fn ur_geometry_is_detected_whatever_the_collision_shapes() {
     );
     // At the link's collision origin (z -0.05) plus the mesh's own -0.05.
     assert!((pose.translation.vector - Vector3::new(0.0, 0.0, -0.1)).norm() < 1e-9);
+    // The same millimetres without their scale: 90 m across, a unit slip
+    // said as one (every pose collided and `check` said "out of reach").
+    let unscaled = boxes.replace(r#" scale="0.001 0.001 0.001""#, "");
+    let msg = match from_urdf_with(&unscaled, &|_: &str| Ok(cube.as_bytes().to_vec())) {
+        Ok(_) => panic!("accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        msg.contains("a collision shape of link `wrist_3_link` is 90 m across")
+            && msg.contains(r#"scale="0.001 0.001 0.001""#),
+        "{msg}"
+    );
 
     // Angles rounded within the 1e-6 tolerance still count: the closed form
     // then lands within ~3e-8 and a few damped least squares steps polish it.
@@ -343,6 +355,29 @@ fn limits_follow_the_urdf_version_and_joint_type() {
     assert_eq!(q[5], 0.5);
 }
 
+/// `text` with the numbers of every attribute `keys` names (`radius`, or
+/// `<origin xyz` for origins alone) times `k`.
+fn scaled_lengths(text: &str, keys: &[&str], k: f64) -> String {
+    let mut out = String::new();
+    let mut rest = text;
+    while let Some(at) = keys
+        .iter()
+        .filter_map(|key| rest.find(&format!("{key}=\"")).map(|i| i + key.len() + 2))
+        .min()
+    {
+        let end = at + rest[at..].find('"').unwrap();
+        let scaled: Vec<String> = rest[at..end]
+            .split_whitespace()
+            .map(|v| (v.parse::<f64>().unwrap() * k).to_string())
+            .collect();
+        out.push_str(&rest[..at]);
+        out.push_str(&scaled.join(" "));
+        rest = &rest[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
 fn rejected(text: &str) -> String {
     match from_urdf(text) {
         Ok(_) => panic!("accepted"),
@@ -394,6 +429,34 @@ fn unusable_descriptions_are_rejected_with_reasons() {
     assert!(
         msg.contains("velocity of at least 0.01 rad/s, not 0.0001"),
         "{msg}"
+    );
+
+    // A description exported in millimetres: its base is 150 m across
+    // (it was read, and `check` said its start pose was out of reach).
+    let msg = rejected(&scaled_lengths(
+        UR10_URDF,
+        &["<origin xyz", "radius", "length"],
+        1000.0,
+    ));
+    assert!(
+        msg.contains("a collision shape of link `base_link` is 150 m across")
+            && msg.contains("divided by 1000"),
+        "{msg}"
+    );
+    // Its origins alone: the joints span about 1.6 km.
+    let msg = rejected(&scaled_lengths(UR10_URDF, &["<origin xyz"], 1000.0));
+    assert!(
+        msg.contains("`ur10`'s joints span 1") && msg.contains("divided by 1000"),
+        "{msg}"
+    );
+    // A description of a small arm in metres is read.
+    assert!(
+        from_urdf(&scaled_lengths(
+            UR10_URDF,
+            &["<origin xyz", "radius", "length"],
+            0.3
+        ))
+        .is_ok()
     );
 
     let two_roots = edited(
