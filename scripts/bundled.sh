@@ -60,11 +60,12 @@ cat "${reports[@]}" | jq -rs '
     planner: .[0].planner,
     scenarios: (map(.scenarios) | add),
     packed: (map(.sr.rate * .scenarios | round) | add),
-    reasoner: (map(.reasoner_sr.rate * .reasoner_scenarios | round) | add),
-    no_fallback: (map(.sr_no_fallback.rate * .scenarios | round) | add),
+    reasoner: (map(select(.reasoner_sr != null) | .reasoner_sr.rate * .reasoner_scenarios | round) | add),
+    # The baselines have no fallback (their rate is null): all they packed.
+    no_fallback: (map((.sr_no_fallback // .sr).rate * .scenarios | round) | add),
     violations: (map(.violations) | add),
     fallbacks: (map(.fallback_kinds | to_entries[]) | group_by(.key)
       | map({key: .[0].key, value: (map(.value) | add)}) | from_entries)
   } |
-  "\(.planner): \(.packed) of \(.scenarios) packed, reasoner right on \(.reasoner), \(.no_fallback) without fallback, \(.violations) violations; fallbacks: \(.fallbacks | if . == {} then "none" else (to_entries | map("\(.value) \(.key)") | join(", ")) end)"
+  "\(.planner): \(.packed) of \(.scenarios) packed, reasoner right on \(.reasoner // "n/a (no reasoner)"), \(.no_fallback) without fallback, \(.violations) violations; fallbacks: \(.fallbacks | if . == {} then "none" else (to_entries | map("\(.value) \(.key)") | join(", ")) end)"
 '
