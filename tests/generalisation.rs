@@ -439,6 +439,17 @@ fn a_deeper_box_and_taller_products_than_any_taught_are_packed_without_fallback(
     }
 }
 
+/// A small product let go at the bottom of a deep tote
+/// (tests/cells/deep_tote.pack, helper AA's cell): in the arm's shape
+/// it was carried in, the forearm met the tote's near wall at every
+/// height the release was raised to, and the release went to
+/// RRT-Connect. It is now tried in the arm's other shapes, as the
+/// expert's inverse kinematics takes its nearest free solution.
+#[test]
+fn a_release_deep_in_a_tote_changes_the_arms_shape_as_the_experts_does() {
+    file_packs_without_fallback("tests/cells/deep_tote.pack", "same_as_taught");
+}
+
 /// Boxes close to the robot's base (tests/cells/near_base.pack, after a
 /// helper's probe cells 7102 and 7111). A 300 mm deep tote beside the
 /// base: from the usual "ready" shape the arm started in, the upper arm

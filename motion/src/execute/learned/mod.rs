@@ -981,12 +981,14 @@ impl<W: World> Learned<'_, W> {
                 // (the arm cannot reach so deep: a deep box near the base,
                 // the forearm over its wall; or the cup does not fit in
                 // the box), as far above that.
+                let mut experts_height = None;
                 if colliding
                     && rolled.is_err()
                     && !self.station.late()
                     && let Some(experts) = self.experts_release(k, plan, start, load, room)
                     && experts > plan.expert[k].tip[2]
                 {
+                    experts_height = Some(experts);
                     let above = ceiling;
                     ceiling = room.min(experts.max(goal[2]) + COLLIDING_RELEASE_RAISE);
                     if let Some(route) = self.raised(
@@ -1056,6 +1058,56 @@ impl<W: World> Learned<'_, W> {
                         });
                     if let Some((kept, route)) = found {
                         goals[k] = kept;
+                        rolled = Ok(route);
+                    }
+                }
+                // A release that no height makes free in the arm's own
+                // shape (a 15 mm product let go in a tote 350 mm deep:
+                // the forearm of the shape it was carried in against the
+                // near wall at every height): the same release in another
+                // arm shape, raised as the learned one is, as the
+                // expert's inverse kinematics takes its nearest free
+                // solution there (helper AA's cells: every such release
+                // went to RRT-Connect). First one motion there at any
+                // height, as the expert's is (from the height the
+                // expert's own lets go at, then the lower ones: 36 ms a
+                // release from the lowest up), then through the other
+                // shape's joints above the slot (a second longer, where
+                // the swing at the lowest height dragged the cup along
+                // the wall). Only a shape from which the back-up finds
+                // its way up (in some, the forearm folds into wrist 2 on
+                // every way up: 1.5 s of searching, then RRT-Connect).
+                if release_collides(switch, &rolled) && !self.station.late() {
+                    let up = Load::released(plan.product);
+                    let above = goals[1][2];
+                    let mut heights: Vec<f64> = std::iter::once(goal[2])
+                        .chain(self.raise_heights(goal[2], (goal[2], ceiling)))
+                        .collect();
+                    if let Some(experts) = experts_height {
+                        let lower = heights.iter().take_while(|z| **z < experts - 1e-9).count();
+                        heights.rotate_left(lower);
+                    }
+                    let reshaped = |direct: bool| {
+                        let budget = |_: &&f64| !self.station.late();
+                        heights.iter().take_while(budget).find_map(|&z| {
+                            let raised = [goal[0], goal[1], z];
+                            self.reshaped_then(
+                                start,
+                                raised,
+                                tolerance,
+                                load,
+                                Shapes::Others,
+                                &mut |route| {
+                                    let end = *route.waypoints.last()?;
+                                    (!direct || route.waypoints.len() == 1)
+                                        .then(|| self.way_up(end, above, up, Ways::All).ok())
+                                        .flatten()
+                                        .map(|_| ())
+                                },
+                            )
+                        })
+                    };
+                    if let Some((route, ())) = reshaped(true).or_else(|| reshaped(false)) {
                         rolled = Ok(route);
                     }
                 }
