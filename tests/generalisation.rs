@@ -259,6 +259,41 @@ fn a_model_taught_one_shape_hovers_in_another_where_its_own_meets_a_crate() {
     }
 }
 
+/// A model taught one cell runs another of the line (helper AA's
+/// tests/cells/turned/): taught with the box in front of its products,
+/// every carry turned counter-clockwise, and in a cell whose short way to
+/// the box is clockwise the sub-goal planner put the approach on the far
+/// side (its turn input clamped to the turns taught): the base swung 241
+/// degrees instead of 119, the package 25% longer than the expert's. Each
+/// sub-goal is now also taught the other way round (mirrored).
+#[test]
+fn a_model_taught_turning_one_way_turns_the_short_way_in_another_cell() {
+    let dir = scratch("generalisation", "turned");
+    let (model, out) = compiled_and_trained("tests/cells/turned/taught_cell.pack", &dir, 0);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let time = |planner: &[&str]| {
+        let mut args = vec![
+            "execute",
+            "tests/cells/turned/other_cell.pack",
+            "--scenario",
+            "side_plain",
+            "--json",
+        ];
+        args.extend(planner);
+        let out = packwright(&args);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+        let report = json(&out);
+        assert_eq!(report["complete"], true, "{report}");
+        report["time_s"].as_f64().unwrap_or(f64::INFINITY)
+    };
+    let learned = time(&["--model", &model]);
+    let expert = time(&["--planner", "expert"]);
+    assert!(
+        learned <= 1.1 * expert,
+        "learned {learned} s against the expert's {expert} s"
+    );
+}
+
 /// Found by a probe of 100 cells no one had looked at (seeds 3000-3099,
 /// the bundled model, which was not taught them): in gen_3078 a learned
 /// release whose motion collides is handed to RRT-Connect at the expert's

@@ -127,6 +127,45 @@ pub struct SubGoalExample {
     pub target: [f32; 3],
 }
 
+impl SubGoalExample {
+    /// The example reflected in the vertical plane through the robot's
+    /// base and the feature: the cup tip and the sub-goal on the other
+    /// side, at the same radius and height, so the turn to the feature
+    /// and the sub-goal's azimuth from it go the other way round
+    /// ([`subgoal_input`], [`subgoal_output`]). The expert's sub-goals are
+    /// symmetric so (over a product or a slot, or half way round on the
+    /// way there), and a model taught turning one way only (a cell's box
+    /// on one side of its products) put the approach on the far side
+    /// where the short way round turned the other: the arm swung 241
+    /// degrees instead of 119. Unchanged where the feature stands over
+    /// the base.
+    pub fn mirrored(&self) -> SubGoalExample {
+        let q = &self.query;
+        let (ux, uy) = (q.feature[0] - q.base[0], q.feature[1] - q.base[1]);
+        let length = ux.hypot(uy);
+        if length < 1e-6 {
+            return self.clone();
+        }
+        let (ux, uy) = (ux / length, uy / length);
+        let reflect = |p: [f32; 3]| {
+            let (dx, dy) = (p[0] - q.base[0], p[1] - q.base[1]);
+            let along = dx * ux + dy * uy;
+            [
+                q.base[0] + 2.0 * along * ux - dx,
+                q.base[1] + 2.0 * along * uy - dy,
+                p[2],
+            ]
+        };
+        SubGoalExample {
+            query: SubGoalQuery {
+                tool: reflect(q.tool),
+                ..*q
+            },
+            target: reflect(self.target),
+        }
+    }
+}
+
 /// One joint action of the demonstrator.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ActionExample {
@@ -344,6 +383,51 @@ pub fn one_hot(out: &mut Vec<f32>, k: usize, n: usize) {
 mod tests {
     use super::*;
     use packwright_interface::Node;
+
+    /// A mirrored example turns the other way round to its feature, and
+    /// its sub-goal lies as far round the other way: the same radii and
+    /// heights, the turn and the arc negated.
+    #[test]
+    fn a_mirrored_sub_goal_turns_the_other_way_round() {
+        let e = SubGoalExample {
+            query: SubGoalQuery {
+                stage: Stage::Placing,
+                index: 0,
+                feature: [0.7, 0.3, 0.08],
+                tool: [-0.2, 0.6, 0.25],
+                height: 0.05,
+                base: [0.1, -0.1, 0.0],
+            },
+            target: [0.5, 0.6, 0.3],
+        };
+        let m = e.mirrored();
+        let (x, mx) = (subgoal_input(&e.query), subgoal_input(&m.query));
+        let (y, my) = (
+            subgoal_output(&e.query, e.target),
+            subgoal_output(&m.query, m.target),
+        );
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
+        assert!(x[2].abs() > 0.5 && close(mx[2], -x[2]), "{x:?} {mx:?}");
+        assert!(y[2].abs() > 0.1 && close(my[2], -y[2]), "{y:?} {my:?}");
+        for i in [0, 1] {
+            assert!(
+                close(mx[i], x[i]) && close(my[i], y[i]),
+                "{x:?} {mx:?} {y:?} {my:?}"
+            );
+        }
+        assert_eq!(mx[3..], x[3..]);
+        // Mirrored twice: the example itself.
+        let back = m.mirrored();
+        for (a, b) in back
+            .query
+            .tool
+            .iter()
+            .chain(&back.target)
+            .zip(e.query.tool.iter().chain(&e.target))
+        {
+            assert!(close(*a, *b));
+        }
+    }
 
     /// Whether a product is packed reads the same in any cell, as the
     /// rule judges it: one waiting 12 cm from its slot (a compact cell,

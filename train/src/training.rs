@@ -477,6 +477,10 @@ pub fn train(
     let _ = initial_subgoal.forward(subgoal_batch(&[&set.subgoals[0]], &device).0, None);
     let _ = initial_dynamics.forward(action_batch(&[&set.actions[0]], &device).0);
     let rng_for = |k: u64| ChaCha8Rng::seed_from_u64(config.seed.wrapping_mul(3).wrapping_add(k));
+    // Every sub-goal also the other way round (`SubGoalExample::mirrored`):
+    // learnt from with its original when that is a training sample, and
+    // within the bounds of the queries taught.
+    let mirrored: Vec<SubGoalExample> = set.subgoals.iter().map(SubGoalExample::mirrored).collect();
     let (
         (dynamics, dynamics_metrics, dagger),
         (reasoner, reasoner_metrics),
@@ -565,13 +569,21 @@ pub fn train(
         };
         let mut rng = rng_for(1);
         let subgoal = {
-            let (train_idx, valid_idx) = split(set.subgoals.len(), config.holdout, &mut rng);
-            let pick = |idx: &[usize]| idx.iter().map(|&i| &set.subgoals[i]).collect::<Vec<_>>();
+            let n = set.subgoals.len();
+            let (train_idx, valid_idx) = split(n, config.holdout, &mut rng);
+            // Index i + n is sample i mirrored.
+            let pick = |idx: &[usize]| {
+                idx.iter()
+                    .map(|&i| set.subgoals.get(i).unwrap_or_else(|| &mirrored[i - n]))
+                    .collect::<Vec<_>>()
+            };
             let eval_idx = if valid_idx.is_empty() {
                 train_idx.clone()
             } else {
                 valid_idx.clone()
             };
+            let originals = train_idx.len();
+            let train_idx: Vec<usize> = train_idx.iter().flat_map(|&i| [i, i + n]).collect();
             let valid_examples = pick(&eval_idx);
             let (vx, vy) = subgoal_batch(&valid_examples, &plain);
             let latent = model_config.subgoal_latent;
@@ -627,6 +639,8 @@ pub fn train(
                 |_| true,
                 progress,
             );
+            // Counted without their mirrored copies.
+            subgoal_metrics.train_samples = originals;
             subgoal_metrics.parts = subgoal_check(&subgoal.valid(), &vx, &vy, &valid_examples).2;
             subgoal_metrics.metric =
                 measured_on(&subgoal_metrics, "mean sub-goal error (m, Euclidean)");
@@ -640,7 +654,7 @@ pub fn train(
     let networks = Trained::new(
         model_config,
         config.clone(),
-        TaughtQueries::of(set.subgoals.iter().map(|e| &e.query)),
+        TaughtQueries::of(set.subgoals.iter().chain(&mirrored).map(|e| &e.query)),
         reasoner.valid(),
         subgoal.valid(),
         dynamics.valid(),
@@ -881,9 +895,16 @@ mod tests {
             nets.action([0.01, 0.02, -0.01], [0.1, -1.0, 1.2]),
             loaded.action([0.01, 0.02, -0.01], [0.1, -1.0, 1.2])
         );
-        // The queries taught are saved with it, and bound its answers.
-        let taught = TaughtQueries::of(set.subgoals.iter().map(|e| &e.query));
+        // The queries taught are saved with it, and bound its answers:
+        // each also the other way round, so a turn is bounded as far one
+        // way as the other.
+        let mirrored: Vec<SubGoalExample> =
+            set.subgoals.iter().map(SubGoalExample::mirrored).collect();
+        let taught = TaughtQueries::of(set.subgoals.iter().chain(&mirrored).map(|e| &e.query));
         assert_eq!(loaded.taught_queries, taught);
+        for b in taught.picking.iter().chain(&taught.placing).flatten() {
+            assert!((b.low[2] + b.high[2]).abs() < 1e-5, "{b:?}");
+        }
         assert!(taught.placing.iter().all(Option::is_some));
         for probe in &set.subgoals[..4] {
             assert_eq!(nets.subgoal(&probe.query), loaded.subgoal(&probe.query));
