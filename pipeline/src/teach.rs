@@ -67,6 +67,9 @@ pub struct Lesson {
     /// demonstrations orders as the inventory lists them
     /// ([`Inferred::guessed`]).
     pub guessed: Guessed,
+    /// One cell taught: a priority list read from the demonstrations
+    /// that a direction explains but for a few ([`Inferred::leaning`]).
+    pub leaning: Option<Leaning>,
 }
 
 /// The expert's replays of a lesson's demonstrations.
@@ -213,12 +216,14 @@ impl Lesson {
             exceptions,
             rivals,
             guessed,
+            leaning,
         } = if ordered.is_empty() {
             Inferred {
                 rule: SequenceRule::Ascending,
                 exceptions: Vec::new(),
                 rivals: Vec::new(),
                 guessed: Guessed::default(),
+                leaning: None,
             }
         } else {
             let shown: Vec<DemonstrationRecord> =
@@ -283,6 +288,7 @@ impl Lesson {
                             exceptions: Vec::new(),
                             rivals: Vec::new(),
                             guessed: Guessed::default(),
+                            leaning: None,
                         },
                         true,
                     )
@@ -378,6 +384,7 @@ impl Lesson {
                 } else {
                     Guessed::default()
                 },
+                leaning: inferred.leaning.filter(|_| cells.len() == 1),
             }
         };
         for &k in &any_order {
@@ -400,6 +407,7 @@ impl Lesson {
             cell_rivals,
             guessed,
             cell_guessed,
+            leaning,
         })
     }
 
@@ -688,6 +696,30 @@ pub struct Inferred {
     /// inventory lists them where the taught pairs allow, a direction as
     /// it orders the rest: a guess, not something taught.
     pub guessed: Guessed,
+    /// A priority list read from demonstrations (none declared) where a
+    /// direction explains all but a few of them, at least
+    /// [`RULE_MAJORITY`]: what the few make the list order against it.
+    pub leaning: Option<Leaning>,
+}
+
+/// A priority list read from demonstrations that a direction explains
+/// all but a few of: the list fits those few too, and through them orders
+/// products no demonstration shows together against the direction (one
+/// hand-written demonstration of five out of inventory order made the
+/// list order two untaught pairs against it, and nothing was said).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Leaning {
+    /// The direction: ascending or descending.
+    pub direction: SequenceRule,
+    /// How many demonstrations break it, of how many.
+    pub breaking: usize,
+    pub demonstrations: usize,
+    /// The first that breaks it: its block and sequence.
+    pub block: String,
+    pub sequence: Vec<String>,
+    /// The pairs the list orders against the direction (first before
+    /// second) that no demonstration shows together.
+    pub against: Vec<(String, String)>,
 }
 
 /// What a priority list read from demonstrations leaves to the inventory.
@@ -913,6 +945,51 @@ fn guessed_in(
     }
 }
 
+/// The direction among `scored` (rules with the demonstrations that
+/// break them) that the fewest break, when some do and it still explains
+/// [`RULE_MAJORITY`] of `demos`, with the pairs the priority list `order`
+/// (of `names`) orders against it that no demonstration shows together
+/// (by `votes`); `None` when there are none.
+fn leaning(
+    demos: &[DemonstrationRecord],
+    names: &[&str],
+    order: &[String],
+    votes: &BTreeMap<(&str, &str), usize>,
+    scored: &[(SequenceRule, Vec<usize>)],
+) -> Option<Leaning> {
+    let (direction, breaking) = scored
+        .iter()
+        .filter(|(rule, broken)| {
+            !matches!(rule, SequenceRule::Listed(_))
+                && !broken.is_empty()
+                && explains_majority(demos.len() - broken.len(), demos.len())
+        })
+        .min_by_key(|(_, broken)| broken.len())?;
+    let along: Vec<&str> = direction
+        .chain(names)
+        .into_iter()
+        .map(|i| names[i])
+        .collect();
+    let place = |n: &str| along.iter().position(|&m| m == n);
+    let shown = |a: &str, b: &str| votes.contains_key(&(a, b)) || votes.contains_key(&(b, a));
+    let against: Vec<(String, String)> = order
+        .iter()
+        .enumerate()
+        .flat_map(|(i, a)| order[i + 1..].iter().map(move |b| (a, b)))
+        .filter(|(a, b)| place(b) < place(a) && !shown(a, b))
+        .map(|(a, b)| (a.clone(), b.clone()))
+        .collect();
+    let first = &demos[*breaking.first()?];
+    (!against.is_empty()).then(|| Leaning {
+        direction: direction.clone(),
+        breaking: breaking.len(),
+        demonstrations: demos.len(),
+        block: first.block.clone(),
+        sequence: first.sequence.clone(),
+        against,
+    })
+}
+
 /// Whether `sequence` (product names) follows `rule` in `inventory`
 /// (product names in listed order).
 fn follows(rule: &SequenceRule, inventory: &[&str], sequence: &[String]) -> bool {
@@ -1045,6 +1122,7 @@ pub fn sequence_rule(
                 exceptions,
                 rivals: Vec::new(),
                 guessed: Guessed::default(),
+                leaning: None,
             });
         }
     }
@@ -1066,12 +1144,14 @@ pub fn sequence_rule(
                 exceptions: Vec::new(),
                 rivals: Vec::new(),
                 guessed: Guessed::default(),
+                leaning: None,
             },
             |(rule, exceptions)| Inferred {
                 rule: rule.clone(),
                 exceptions: exceptions.clone(),
                 rivals: Vec::new(),
                 guessed: Guessed::default(),
+                leaning: None,
             },
         );
     // The pairs of products the demonstrations put in an order.
@@ -1089,7 +1169,8 @@ pub fn sequence_rule(
         let listed_other = priority(reversed);
         let other = breaking(&listed_other);
         best.rivals = scored
-            .into_iter()
+            .iter()
+            .cloned()
             .chain(std::iter::once((listed_other, other)))
             .filter(|(r, exceptions)| {
                 *r != best.rule
@@ -1116,6 +1197,9 @@ pub fn sequence_rule(
         let g = guessed(&order, after);
         if listed || (best.rivals.is_empty() && 2 * g.ordered < g.pairs) {
             best.guessed = g;
+        }
+        if listed {
+            best.leaning = leaning(demos, &names, &order, &votes, &scored);
         }
     }
     let agree = demos.len() - best.exceptions.len();
@@ -1473,6 +1557,49 @@ inventory inv for c {{
             .expect("a rule");
         assert_eq!(inferred.rule, SequenceRule::Descending);
         assert!(inferred.rivals.is_empty(), "{:?}", inferred.rivals);
+    }
+
+    /// Five hand-written demonstrations, four in inventory order and one
+    /// not (helper AA's: e before b): the priority list fits all five and
+    /// is the rule, and through the fifth it orders two pairs no
+    /// demonstration shows together against the inventory's order (c
+    /// before b through c, e and e, b; e before d). Those are named with
+    /// the demonstration they rest on; four demonstrations alone teach
+    /// ascending, and nothing leans.
+    #[test]
+    fn a_list_that_one_demonstration_turns_from_a_direction_names_what_it_reorders() {
+        let slip = by_hand(&[
+            &["p1", "p3", "p5"],
+            &["p2", "p4"],
+            &["p3", "p6"],
+            &["p1", "p4", "p6"],
+            &["p5", "p2"],
+        ]);
+        let inferred = rule_of(&slip).ok().flatten().expect("a rule");
+        let SequenceRule::Listed(list) = &inferred.rule else {
+            panic!("{:?}", inferred.rule)
+        };
+        assert_eq!(list, &["p1", "p3", "p5", "p2", "p4", "p6"]);
+        let leaning = inferred.leaning.expect("leans on one demonstration");
+        assert_eq!(leaning.direction, SequenceRule::Ascending);
+        assert_eq!((leaning.breaking, leaning.demonstrations), (1, 5));
+        assert_eq!(
+            (leaning.block.as_str(), &leaning.sequence[..]),
+            ("o4_seen", &["p5".to_owned(), "p2".to_owned()][..])
+        );
+        assert_eq!(
+            leaning.against,
+            [("p3", "p2"), ("p5", "p4")].map(|(a, b)| (a.to_owned(), b.to_owned()))
+        );
+        let four = by_hand(&[
+            &["p1", "p3", "p5"],
+            &["p2", "p4"],
+            &["p3", "p6"],
+            &["p1", "p4", "p6"],
+        ]);
+        let inferred = rule_of(&four).ok().flatten().expect("a rule");
+        assert_eq!(inferred.rule, SequenceRule::Ascending);
+        assert_eq!(inferred.leaning, None);
     }
 
     /// A priority list read from hand-written demonstrations (helper V:

@@ -117,6 +117,23 @@ pub enum Weakness {
         taught: packwright_interface::SequenceRule,
         rivals: Vec<packwright_interface::SequenceRule>,
     },
+    /// A priority list read from demonstrations (none declared) that a
+    /// direction explains but for a few, and that through those few
+    /// orders products no demonstration shows together against it
+    /// ([`packwright_pipeline::teach::Leaning`]).
+    ListOverDirection {
+        taught: packwright_interface::SequenceRule,
+        direction: packwright_interface::SequenceRule,
+        /// How many demonstrations break the direction, of how many.
+        breaking: usize,
+        demonstrations: usize,
+        /// The first that breaks it: its block and sequence.
+        block: String,
+        sequence: Vec<String>,
+        /// The pairs the list orders against the direction (first before
+        /// second).
+        against: Vec<(String, String)>,
+    },
     /// A priority list read from demonstrations (none declared) that
     /// order only some of its pairs of products, the others standing in
     /// it as the inventory lists them; or a direction read from
@@ -208,6 +225,37 @@ impl std::fmt::Display for Weakness {
                     .collect::<Vec<_>>()
                     .join("; ")
             ),
+            Weakness::ListOverDirection {
+                taught,
+                direction,
+                breaking,
+                demonstrations,
+                block,
+                sequence,
+                against,
+            } => {
+                let pairs: Vec<String> = against
+                    .iter()
+                    .map(|(a, b)| format!("{a} before {b}"))
+                    .collect();
+                let pairs: Vec<&str> = pairs.iter().map(String::as_str).collect();
+                let word = match direction {
+                    packwright_interface::SequenceRule::Descending => "descending",
+                    _ => "ascending",
+                };
+                write!(
+                    f,
+                    "the demonstrations follow {direction} but for {breaking} of {demonstrations} (the first, in block `{block}`, handles {}); the priority list the model keeps, {taught}, fits them all, and so orders {} against {word} order, though no demonstration shows those products together. If {} a slip, leave {} out (`train --demos` with the other blocks), or declare the order in a `demos` block (`sequence {word}`)",
+                    sequence.join(", "),
+                    and_list(&pairs),
+                    if *breaking == 1 {
+                        "that was"
+                    } else {
+                        "those were"
+                    },
+                    if *breaking == 1 { "it" } else { "them" },
+                )
+            }
             Weakness::PairsGuessed {
                 cell,
                 taught,
@@ -448,6 +496,17 @@ pub fn run(
             &lesson.sequence,
             &lesson.guessed,
         ));
+    }
+    if let Some(l) = &lesson.leaning {
+        warnings.push(Weakness::ListOverDirection {
+            taught: lesson.sequence.clone(),
+            direction: l.direction.clone(),
+            breaking: l.breaking,
+            demonstrations: l.demonstrations,
+            block: l.block.clone(),
+            sequence: l.sequence.clone(),
+            against: l.against.clone(),
+        });
     }
     for (cell, g) in &lesson.cell_guessed {
         warnings.push(Weakness::pairs_guessed(
