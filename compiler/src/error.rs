@@ -232,7 +232,8 @@ pub enum Error {
         by: String,
     },
     #[error(
-        "product `{product}` does not fit in slot `{slot}`: it sticks out of box `{box_name}` by {by_mm:.0} mm"
+        "product `{product}` does not fit in slot `{slot}`{}: it sticks out of box `{box_name}` by {by_mm:.0} mm",
+        nor_in(also)
     )]
     DoesNotFit {
         at: Loc,
@@ -240,6 +241,9 @@ pub enum Error {
         slot: String,
         box_name: String,
         by_mm: f64,
+        /// A generator's other slots the product does not fit either
+        /// (all said at once: fixing the first showed the next).
+        also: Vec<String>,
     },
     #[error("`{a}` in slot `{slot_a}` and `{b}` in slot `{slot_b}` would overlap")]
     PlacedOverlap {
@@ -618,4 +622,20 @@ pub enum Moved {
     Away,
     /// Nearer it.
     Nearer,
+}
+
+/// " (nor in `a` or `b`)" for the other slots a product does not fit,
+/// nothing for none.
+fn nor_in(also: &[String]) -> String {
+    match also {
+        [] => String::new(),
+        [one] => format!(" (nor in `{one}`)"),
+        [rest @ .., last] => format!(
+            " (nor in {} or `{last}`)",
+            rest.iter()
+                .map(|s| format!("`{s}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
 }

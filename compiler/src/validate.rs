@@ -347,6 +347,7 @@ fn check_placement(
                 slot: cell.slots[slot].name.clone(),
                 box_name: cell.boxes[cell.slots[slot].box_index].name.clone(),
                 by_mm: excess * 1000.0,
+                also: Vec::new(),
             });
         }
         for &(other, other_slot, _) in &pairs[..i] {
@@ -374,18 +375,23 @@ fn check_choose(m: &Model, inv: &Inventory, c: &Choose, errors: &mut Vec<Error>)
     let cell = &m.cells[inv.cell];
     let product = |e: usize| &m.products[inv.entries[e].product];
     for &e in &c.entries {
-        if let Some((&slot, excess)) = c
+        let misfits: Vec<(usize, f64)> = c
             .slots
             .iter()
-            .map(|s| (s, fit_excess(cell, product(e), *s)))
-            .find(|(_, x)| *x > 0.0)
-        {
+            .map(|&s| (s, fit_excess(cell, product(e), s)))
+            .filter(|(_, x)| *x > 0.0)
+            .collect();
+        if let Some((&(slot, excess), rest)) = misfits.split_first() {
             errors.push(Error::DoesNotFit {
                 at: c.loc,
                 product: product(e).name.clone(),
                 slot: cell.slots[slot].name.clone(),
                 box_name: cell.boxes[cell.slots[slot].box_index].name.clone(),
                 by_mm: excess * 1000.0,
+                also: rest
+                    .iter()
+                    .map(|&(s, _)| cell.slots[s].name.clone())
+                    .collect(),
             });
         }
     }
