@@ -803,6 +803,19 @@ fn cell_rule_among(
         .filter(|b| b.kind == "demos" && b.priority.is_empty() && !b.any_order)
         .map(|b| (b.name.as_str(), direction(b.descending)))
         .collect();
+    // Demonstrations of one product each order nothing, unless a block
+    // declares an order for them (a list, or `sequence descending`:
+    // ascending is also what one that wrote nothing gets): as none (a
+    // model not taught the cell said they followed ascending, where a
+    // `sequence random` file was said to order nothing).
+    let shows_order = demos.iter().any(|d| d.sequence.len() > 1)
+        || !declared.is_empty()
+        || demos
+            .iter()
+            .any(|d| directed.get(d.block.as_str()) == Some(&SequenceRule::Descending));
+    if !shows_order {
+        return Ok(None);
+    }
     sequence_rule(world, &demos, &declared, &directed).map(Some)
 }
 
@@ -1180,7 +1193,16 @@ pub fn sequence_rule(
                         .any(|inv| r.chain(inv) != best.rule.chain(inv))
             })
             .map(|(r, _)| r)
-            .collect();
+            .fold(Vec::new(), |mut kept: Vec<SequenceRule>, r| {
+                // One order under two names (descending, and the list
+                // that reverses every inventory) is said once.
+                let same =
+                    |k: &SequenceRule| inventories.iter().all(|inv| k.chain(inv) == r.chain(inv));
+                if !kept.iter().any(same) {
+                    kept.push(r);
+                }
+                kept
+            });
     }
     // What the rule orders that no demonstration does: every such pair
     // of a list read from them; of a direction, when they order fewer
@@ -1557,6 +1579,39 @@ inventory inv for c {{
             .expect("a rule");
         assert_eq!(inferred.rule, SequenceRule::Descending);
         assert!(inferred.rivals.is_empty(), "{:?}", inferred.rivals);
+    }
+
+    /// Demonstrations of one product each order nothing for a model not
+    /// taught the cell, as `sequence random` ones do (helper AB: they
+    /// were said to follow ascending); `sequence descending` written on
+    /// them is an order.
+    #[test]
+    fn single_product_demonstrations_order_a_cell_only_where_declared() {
+        assert_eq!(rule_of(&by_hand(&[&["p1"], &["p3"]])).ok(), Some(None));
+        let declared = "demos d for inv {\n  choose 1 of p1, p2, p3 into s1, s2\n  sequence descending\n  seed 1\n}";
+        let inferred = rule_of(declared).ok().flatten().expect("a rule");
+        assert_eq!(inferred.rule, SequenceRule::Descending);
+        // Taught so (`train`): any order fits, and descending is said
+        // once, not again as the list that reverses the inventory.
+        let world = one_inventory(&["a", "b", "c"]);
+        let singles: Vec<DemonstrationRecord> = ["a", "b", "c"]
+            .iter()
+            .map(|p| DemonstrationRecord {
+                block: "one".into(),
+                cell: "c".into(),
+                inventory: "inv".into(),
+                assignment: Vec::new(),
+                sequence: vec![p.to_string()],
+                human_packed: Vec::new(),
+                missing: Vec::new(),
+                start: Vec::new(),
+                first_sample: 0,
+                samples: 0,
+            })
+            .collect();
+        let inferred = sequence_rule(&world, &singles, &[], &BTreeMap::new()).expect("a rule");
+        assert_eq!(inferred.rule, SequenceRule::Ascending);
+        assert_eq!(inferred.rivals, [SequenceRule::Descending]);
     }
 
     /// Five hand-written demonstrations, four in inventory order and one

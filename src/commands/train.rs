@@ -139,9 +139,10 @@ pub fn run(args: &TrainArgs) -> anyhow::Result<Exit> {
         outln!("{}", serde_json::to_string(&report)?);
     } else {
         outln!(
-            "wrote {}: {} demonstrations of {} {} ({} replayed in {:.1} s), trained in {:.1} s",
+            "wrote {}: {} demonstration{} of {} {} ({} replayed in {:.1} s), trained in {:.1} s",
             args.output.display(),
             report.demonstrations,
+            if report.demonstrations == 1 { "" } else { "s" },
             if report.cells.len() == 1 {
                 "cell"
             } else {

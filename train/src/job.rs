@@ -271,12 +271,17 @@ impl std::fmt::Display for Weakness {
                         _ => groups.push((a, vec![b])),
                     }
                 }
+                // One group more rather than "and 1 more pair".
+                let shown_groups = match groups.get(GROUPS_SHOWN..) {
+                    Some([(_, last)]) if last.len() == 1 => GROUPS_SHOWN + 1,
+                    _ => GROUPS_SHOWN,
+                };
                 let shown: Vec<String> = groups
                     .iter()
-                    .take(GROUPS_SHOWN)
+                    .take(shown_groups)
                     .map(|(a, seconds)| format!("{a} before {}", and_list(seconds)))
                     .collect();
-                let more: usize = groups.iter().skip(GROUPS_SHOWN).map(|g| g.1.len()).sum();
+                let more: usize = groups.iter().skip(shown_groups).map(|g| g.1.len()).sum();
                 let (kept, how, declare) = match taught {
                     packwright_interface::SequenceRule::Listed(_) => (
                         "in the priority list the model keeps",
@@ -695,7 +700,7 @@ mod tests {
     }
 
     /// A guessed priority list's message groups the pairs by the product
-    /// first and names how many it leaves out.
+    /// first and names how many it leaves out (a single one it names).
     #[test]
     fn a_guessed_list_says_which_pairs_stand_by_inventory_position() {
         let list = |names: &[&str]| {
@@ -728,8 +733,33 @@ mod tests {
             text.contains("the other 6 as the inventory lists them"),
             "{text}"
         );
+        // The one pair past the groups shown is named (helper AB: "and 1
+        // more pair" took as long to read).
         assert!(
-            text.contains(": a before b and c; b before d; c before d and e; and 1 more pair."),
+            text.contains(": a before b and c; b before d; c before d and e; d before f."),
+            "{text}"
+        );
+        let Weakness::PairsGuessed {
+            cell,
+            taught,
+            ordered,
+            pairs,
+            mut untaught,
+        } = w
+        else {
+            unreachable!()
+        };
+        untaught.push(pair("e", "f"));
+        let text = Weakness::PairsGuessed {
+            cell,
+            taught,
+            ordered,
+            pairs,
+            untaught,
+        }
+        .to_string();
+        assert!(
+            text.contains(": a before b and c; b before d; c before d and e; and 2 more pairs."),
             "{text}"
         );
     }
