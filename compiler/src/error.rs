@@ -232,8 +232,8 @@ pub enum Error {
         by: String,
     },
     #[error(
-        "product `{product}` does not fit in slot `{slot}`{}: it sticks out of box `{box_name}` by {by_mm:.0} mm",
-        nor_in(also)
+        "product `{product}` does not fit in {}: it sticks out of box `{box_name}` by {by_mm:.0} mm",
+        crate::warning::slot_list(&[std::slice::from_ref(slot), also].concat())
     )]
     DoesNotFit {
         at: Loc,
@@ -622,20 +622,4 @@ pub enum Moved {
     Away,
     /// Nearer it.
     Nearer,
-}
-
-/// " (nor in `a` or `b`)" for the other slots a product does not fit,
-/// nothing for none.
-fn nor_in(also: &[String]) -> String {
-    match also {
-        [] => String::new(),
-        [one] => format!(" (nor in `{one}`)"),
-        [rest @ .., last] => format!(
-            " (nor in {} or `{last}`)",
-            rest.iter()
-                .map(|s| format!("`{s}`"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    }
 }

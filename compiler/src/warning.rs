@@ -372,7 +372,7 @@ fn write_met(
 
 /// Slots for people: "slot `a`", "slots `a` and `b`", "slots `a`, `b`
 /// and 3 more".
-fn slot_list(slots: &[String]) -> String {
+pub(crate) fn slot_list(slots: &[String]) -> String {
     let named: Vec<String> = slots.iter().take(3).map(|s| format!("`{s}`")).collect();
     match (slots.len(), named.as_slice()) {
         (0, _) => "its slot".to_owned(),
